@@ -1,0 +1,161 @@
+// EvidentialOcTree: an OctoMap occupancy tree whose voxels also carry fused semantic evidence.
+// Shaped like OctoMap's ColorOcTree (node type, tree type, static registration), with one
+// difference: the C floats of semantic evidence live in a pool owned by the tree and the node
+// keeps a 32-bit index into it. A node therefore costs exactly what an OcTreeNode costs (16 B);
+// only voxels that received evidence pay 4*C bytes more.
+#pragma once
+
+#include <cstdint>
+#include <iosfwd>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <octomap/OcTreeNode.h>
+#include <octomap/OccupancyOcTreeBase.h>
+
+#include "evidential_octomap/fusion_rule.h"
+#include "evidential_octomap/semantic_config.h"
+
+namespace evidential_octomap {
+
+class EvidentialOcTree;
+
+class EvidentialOcTreeNode : public octomap::OcTreeNode {
+ public:
+  static constexpr uint32_t kNoPayload = 0xFFFFFFFFu;
+
+  bool hasSemantics() const { return payload_ != kNoPayload; }
+
+  // Occupancy and payload slot are compared; the tree compares payload contents.
+  bool operator==(const EvidentialOcTreeNode& rhs) const {
+    return rhs.value == value && rhs.payload_ == payload_;
+  }
+  // OctoMap calls copyData when it expands or prunes; our tree overrides both and moves
+  // payloads itself, so only occupancy is copied here (a copied slot would alias).
+  void copyData(const EvidentialOcTreeNode& from) { value = from.value; }
+
+ private:
+  friend class EvidentialOcTree;
+  uint32_t payload_ = kNoPayload;
+};
+
+// What one call of insertSemanticScan did.
+struct InsertStats {
+  size_t points_in = 0;             // points handed in
+  size_t points_skipped = 0;        // non-finite coordinates or outside the tree's key range
+  size_t points_beyond_range = 0;   // beyond max_range: free space only, no semantics
+  size_t semantic_points = 0;       // points left after down-sampling
+  size_t points_dropped_uncertain = 0;  // above the percentile threshold
+  double uncertainty_threshold = 0.0;   // U_thr of this scan
+  size_t voxels_updated = 0;        // leaves that received semantic evidence
+  double ms_occupancy = 0.0;        // ray casting and occupancy update
+  double ms_kernel = 0.0;           // kernel evaluation and per-voxel aggregation
+  double ms_update = 0.0;           // applying aggregates to leaves, inner nodes, pruning
+};
+
+class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNode> {
+ public:
+  static constexpr int kMaxClasses = 255;
+
+  // num_classes in 1..255; class names default to "class_<i>". Throws std::invalid_argument.
+  explicit EvidentialOcTree(double resolution, int num_classes = 1,
+                            const SemanticConfig& config = SemanticConfig());
+  EvidentialOcTree(const EvidentialOcTree& rhs);
+  EvidentialOcTree& operator=(const EvidentialOcTree&) = delete;
+
+  // --- AbstractOcTree -------------------------------------------------------------------
+  EvidentialOcTree* create() const override { return new EvidentialOcTree(resolution); }
+  std::string getTreeType() const override { return "EvidentialOcTree"; }
+
+  // --- semantic settings ----------------------------------------------------------------
+  int numClasses() const { return num_classes_; }
+  const std::vector<std::string>& classNames() const { return class_names_; }
+  void setClassNames(const std::vector<std::string>& names);  // size must be C
+  const SemanticConfig& config() const { return config_; }
+  // Changing the rule re-interprets stored payloads, so it is refused while the map holds any.
+  void setConfig(const SemanticConfig& config);
+  const FusionRule& rule() const { return *rule_; }
+
+  // --- integration ----------------------------------------------------------------------
+  // Inserts one scan: occupancy by OctoMap ray casting from origin_W, semantics by the
+  // adaptive sparse kernel. points_W are in the world (tree) frame; evidence is N x C,
+  // row-major, one evidence vector per point (each value finite and >= 0).
+  // Throws std::invalid_argument (and leaves the map unchanged) when evidence is malformed.
+  InsertStats insertSemanticScan(const octomap::Pointcloud& points_W,
+                                 const std::vector<float>& evidence,
+                                 const octomap::point3d& origin_W);
+  // Same, with points in the sensor frame and the sensor pose T_W_S.
+  InsertStats insertSemanticScan(const octomap::Pointcloud& points_S,
+                                 const std::vector<float>& evidence,
+                                 const octomap::pose6d& T_W_S);
+
+  // --- queries --------------------------------------------------------------------------
+  VoxelOpinion opinion(const EvidentialOcTreeNode* node) const;  // node may be null
+  VoxelOpinion query(const octomap::point3d& point_W) const;
+  VoxelOpinion query(const octomap::OcTreeKey& key, unsigned depth = 0) const;
+  // The node's C floats (rule-specific, see fusion_rule.h), or nullptr if it has none.
+  const float* payload(const EvidentialOcTreeNode* node) const;
+  size_t numSemanticNodes() const { return payload_count_; }
+
+  // --- editing (used by the integrator, merge and readers) ----------------------------------
+  // Leaf at full depth for `key`, expanding pruned nodes; created (log-odds 0) when missing and
+  // `create`, else nullptr.
+  EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);
+  // The node's payload, allocated with the rule's prior first if it had none.
+  float* payloadForUpdate(EvidentialOcTreeNode* node);
+  void clearPayload(EvidentialOcTreeNode* node);
+  // Recomputes inner occupancy and inner semantic summaries bottom-up, then prunes.
+  // Inner summary: a copy of the payload of the child holding the most evidence (largest sum).
+  void updateInnerNodes();
+  // Fuses another map of the same resolution, C and rule into this one. Occupancy log-odds add
+  // (clamped) and payloads add, so a.merge(b) and b.merge(a) give equal maps.
+  void merge(const EvidentialOcTree& other);
+  // Rebuilds the payload pool from the nodes that are still in the tree (after deleteNode).
+  void compactPayloads();
+
+  // --- OctoMap overrides ----------------------------------------------------------------
+  bool isNodeCollapsible(const EvidentialOcTreeNode* node) const override;
+  void expandNode(EvidentialOcTreeNode* node) override;
+  bool pruneNode(EvidentialOcTreeNode* node) override;
+  void clear() override;
+  size_t memoryUsage() const override;
+  // The data section: semantic header, then every node (log-odds, child mask, payload).
+  std::istream& readData(std::istream& s) override;
+  std::ostream& writeData(std::ostream& s) const override;
+  // Why the last readData failed (empty after a good read). A failed read leaves the tree empty.
+  const std::string& readError() const { return read_error_; }
+
+ private:
+  void setNumClasses(int num_classes);
+  uint32_t allocatePayload();
+  void releasePayload(EvidentialOcTreeNode* node);
+  float* slot(uint32_t index) { return payloads_.data() + size_t(index) * num_classes_; }
+  const float* slot(uint32_t index) const {
+    return payloads_.data() + size_t(index) * num_classes_;
+  }
+  void copySubtree(const EvidentialOcTree& from, const EvidentialOcTreeNode* src,
+                   EvidentialOcTreeNode* dst);
+  void updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth);
+  void writeNodesRecurs(const EvidentialOcTreeNode* node, std::ostream& s) const;
+  bool readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, std::istream& s);
+
+  int num_classes_ = 1;
+  std::vector<std::string> class_names_;
+  SemanticConfig config_;
+  std::unique_ptr<FusionRule> rule_;
+  std::vector<float> payloads_;         // C floats per slot
+  std::vector<uint32_t> free_payloads_; // released slots, reused first
+  size_t payload_count_ = 0;            // slots in use
+  std::string read_error_;
+
+  // Registers the tree type with AbstractOcTree (the ColorOcTree pattern).
+  class StaticMemberInitializer {
+   public:
+    StaticMemberInitializer();
+    void ensureLinking() {}
+  };
+  static StaticMemberInitializer evidential_octree_member_init_;
+};
+
+}  // namespace evidential_octomap

@@ -1,0 +1,62 @@
+// One fusion interface, three rules (DESIGN §1): dempster (the paper), sbki, ebs.
+//
+// Every rule keeps C floats per semantic voxel (the "payload") and every rule is additive in its
+// own representation, so a scan's contributions can be summed per voxel first and applied once:
+//   dempster: payload^c = L^c = sum log1p(e_hat^c / C)   (evidence-space Dempster, exact, stable)
+//   sbki:     payload^c = alpha^c, prior alpha0, += k'(d, l, sigma0) * onehot(argmax e_i)
+//   ebs:      payload^c = alpha^c, prior 1,     += k(x_i, x) * alpha_i^c / S_i
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace evidential_octomap {
+
+enum class FusionRuleType { kDempster = 0, kSbki = 1, kEbs = 2 };
+inline const std::vector<std::string> kFusionRuleNames{"dempster", "sbki", "ebs"};
+
+// What one point brings to the map: its evidence and the opinion derived from it.
+struct PointOpinion {
+  const float* evidence = nullptr;  // C values, each finite and >= 0
+  double strength = 0.0;            // S = sum(e) + C
+  double uncertainty = 1.0;         // u = C / S
+  int argmax = -1;                  // class with most evidence, -1 when all evidence is zero
+};
+
+// What a voxel says when read back.
+struct VoxelOpinion {
+  int label = -1;            // argmax class; -1 when the voxel has no semantic evidence
+  float uncertainty = 1.0f;  // dempster: mass u in (0, 1]; sbki/ebs: Dirichlet variance of label
+  std::vector<float> belief; // dempster: belief masses b^c; sbki/ebs: expected probabilities
+};
+
+class FusionRule {
+ public:
+  virtual ~FusionRule() = default;
+
+  virtual FusionRuleType type() const = 0;
+  const std::string& name() const { return kFusionRuleNames[static_cast<int>(type())]; }
+
+  // Value of every class entry in a voxel that has seen no evidence yet.
+  virtual float prior() const = 0;
+  // Whether the kernel length adapts to u and the most uncertain points are dropped
+  // (S-BKI uses the plain sparse kernel on every point).
+  virtual bool usesUncertaintyKernel() const = 0;
+  // Whether VoxelOpinion::uncertainty is a mass in [0, 1] (else it needs scaling for the BS).
+  virtual bool uncertaintyIsMass() const = 0;
+
+  // Adds the contribution of `point`, weighted by kernel value k in [0, 1], to `increments` (C).
+  virtual void contribute(const PointOpinion& point, double k, int num_classes,
+                          double* increments) const = 0;
+  // Interprets a payload of C floats.
+  virtual VoxelOpinion readout(const float* payload, int num_classes) const = 0;
+
+  static std::unique_ptr<FusionRule> create(FusionRuleType type, float sbki_prior = 0.001f);
+  // Throws std::invalid_argument naming the valid rules when `name` is unknown.
+  static std::unique_ptr<FusionRule> create(const std::string& name, float sbki_prior = 0.001f);
+};
+
+FusionRuleType fusionRuleFromName(const std::string& name);
+
+}  // namespace evidential_octomap

@@ -1,0 +1,20 @@
+// The sparse kernel of Melkumyan & Ramos and its uncertainty-adaptive length (DESIGN §1).
+#pragma once
+
+#include <vector>
+
+namespace evidential_octomap {
+
+// k'(d, L, sigma0) = sigma0 [ (2 + cos(2 pi d/L))/3 (1 - d/L) + sin(2 pi d/L)/(2 pi) ] for d < L,
+// 0 otherwise, clamped to [0, 1] so an extended belief stays a valid opinion.
+double sparseKernel(double distance, double length, double sigma0);
+
+// Support length of a point with uncertainty u: l * beta * exp(1 - gamma * u).
+double adaptiveLength(double length_scale, double beta, double gamma, double uncertainty);
+
+// U_thr such that the `drop_percent` % most uncertain values lie above it (O(N), nth_element).
+// Points with u <= U_thr are kept. drop_percent <= 0 keeps everything (+inf is returned).
+// `values` is taken by value because nth_element reorders it.
+double uncertaintyThreshold(std::vector<float> values, double drop_percent);
+
+}  // namespace evidential_octomap

@@ -1,0 +1,31 @@
+// One scan into the map: OctoMap ray casting for occupancy, then one kernel loop that spreads
+// every kept point's extended belief to the leaves within its support, aggregated per voxel key
+// for the whole scan before each touched leaf is updated once (DESIGN §2).
+#pragma once
+
+#include <vector>
+
+#include <octomap/Pointcloud.h>
+
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/semantic_config.h"
+
+namespace evidential_octomap {
+
+class ScanIntegrator {
+ public:
+  explicit ScanIntegrator(const SemanticConfig& config) : config_(config) {}
+
+  // points_W: N points in the world (tree) frame.
+  // evidence: N x C row-major evidence, C = tree->numClasses().
+  // origin_W: sensor origin in the world frame, where every ray starts.
+  // tree:     the map to update; the fusion rule is the tree's own.
+  // Throws std::invalid_argument before touching the map when evidence is malformed.
+  InsertStats integrate(const octomap::Pointcloud& points_W, const std::vector<float>& evidence,
+                        const octomap::point3d& origin_W, EvidentialOcTree* tree) const;
+
+ private:
+  SemanticConfig config_;
+};
+
+}  // namespace evidential_octomap

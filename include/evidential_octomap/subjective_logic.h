@@ -1,0 +1,37 @@
+// Subjective-logic opinions and the reduced Dempster rule in belief space (DESIGN §1).
+// The map itself stores the evidence-space form (see fusion_rule.h); these plain functions are
+// for users who want to combine opinions directly and for the cross-checks in the tests.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace evidential_octomap {
+
+// A subjective opinion over C singleton classes: sum(belief) + uncertainty == 1.
+struct Opinion {
+  std::vector<double> belief;
+  double uncertainty = 1.0;
+
+  static Opinion vacuous(int num_classes);
+  int numClasses() const { return static_cast<int>(belief.size()); }
+  int argmax() const;  // -1 when every belief is zero
+};
+
+// EDL opinion of one point: alpha = e + 1, S = sum(alpha), b = e / S, u = C / S.
+Opinion opinionFromEvidence(const float* evidence, int num_classes);
+
+// Reduced Dempster rule M1 (+) M2. Conflict is computed in O(C). Under total conflict
+// (1 - conflict == 0) the result is the vacuous opinion rather than NaN.
+Opinion dempsterCombine(const Opinion& m1, const Opinion& m2);
+
+// Checks one evidence vector: every value finite and >= 0. Returns an empty string when valid,
+// otherwise a message naming the offending class and value.
+std::string checkEvidence(const float* evidence, int num_classes);
+
+// Conversions for inputs that are not raw evidence.
+void evidenceFromAlpha(const float* alpha, int num_classes, float* evidence_out);   // e = alpha - 1
+void evidenceFromLabel(int label, int num_classes, float magnitude, float* evidence_out);  // one-hot
+
+}  // namespace evidential_octomap

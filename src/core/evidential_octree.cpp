@@ -1,0 +1,531 @@
+// EvidentialOcTree in ColorOcTree.cpp's order: node part (header only), tree part, static member.
+#include "evidential_octomap/evidential_octree.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <stdexcept>
+
+#include "evidential_octomap/scan_integrator.h"
+
+namespace evidential_octomap {
+namespace {
+
+constexpr uint32_t kFileMagic = 0x4D455645u;  // "EVEM"
+constexpr uint32_t kFileEndMagic = 0x444E4545u;
+constexpr uint32_t kFileVersion = 1;
+constexpr uint32_t kMaxNameLength = 4096;
+
+template <typename T>
+void writePod(std::ostream& s, const T& value) {
+  s.write(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+template <typename T>
+bool readPod(std::istream& s, T& value) {
+  return static_cast<bool>(s.read(reinterpret_cast<char*>(&value), sizeof(T)));
+}
+void writeString(std::ostream& s, const std::string& text) {
+  writePod(s, static_cast<uint32_t>(text.size()));
+  s.write(text.data(), static_cast<std::streamsize>(text.size()));
+}
+bool readString(std::istream& s, std::string& text) {
+  uint32_t length = 0;
+  if (!readPod(s, length) || length > kMaxNameLength) return false;
+  text.resize(length);
+  return static_cast<bool>(s.read(&text[0], length));
+}
+
+// Thrown inside readData only; turned into read_error_ there.
+struct FormatError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace
+
+// --- construction and settings -----------------------------------------------------------------
+
+EvidentialOcTree::EvidentialOcTree(double resolution, int num_classes,
+                                   const SemanticConfig& config)
+    : OccupancyOcTreeBase<EvidentialOcTreeNode>(resolution) {
+  setNumClasses(num_classes);
+  setConfig(config);
+  evidential_octree_member_init_.ensureLinking();
+}
+
+EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
+    : OccupancyOcTreeBase<EvidentialOcTreeNode>(rhs.resolution),
+      num_classes_(rhs.num_classes_),
+      class_names_(rhs.class_names_),
+      config_(rhs.config_),
+      rule_(FusionRule::create(rhs.config_.rule, rhs.config_.sbki_prior)) {
+  // OctoMap's own copy constructor slices derived nodes, so the nodes are copied here.
+  clamping_thres_min = rhs.clamping_thres_min;
+  clamping_thres_max = rhs.clamping_thres_max;
+  prob_hit_log = rhs.prob_hit_log;
+  prob_miss_log = rhs.prob_miss_log;
+  occ_prob_thres_log = rhs.occ_prob_thres_log;
+  if (rhs.root) {
+    root = new EvidentialOcTreeNode();
+    tree_size = 1;
+    copySubtree(rhs, rhs.root, root);
+  }
+}
+
+void EvidentialOcTree::copySubtree(const EvidentialOcTree& from, const EvidentialOcTreeNode* src,
+                                   EvidentialOcTreeNode* dst) {
+  dst->setValue(src->getValue());
+  if (src->hasSemantics()) std::copy_n(from.slot(src->payload_), num_classes_, payloadForUpdate(dst));
+  for (unsigned i = 0; i < 8; ++i) {
+    if (from.nodeChildExists(src, i)) copySubtree(from, from.getNodeChild(src, i), createNodeChild(dst, i));
+  }
+}
+
+void EvidentialOcTree::setNumClasses(int num_classes) {
+  if (num_classes < 1 || num_classes > kMaxClasses) {
+    throw std::invalid_argument("number of classes must be in 1..255, got " +
+                                std::to_string(num_classes));
+  }
+  clear();
+  num_classes_ = num_classes;
+  class_names_.clear();
+  for (int c = 0; c < num_classes; ++c) class_names_.push_back("class_" + std::to_string(c));
+}
+
+void EvidentialOcTree::setClassNames(const std::vector<std::string>& names) {
+  if (static_cast<int>(names.size()) != num_classes_) {
+    throw std::invalid_argument("expected " + std::to_string(num_classes_) + " class names, got " +
+                                std::to_string(names.size()));
+  }
+  class_names_ = names;
+}
+
+void EvidentialOcTree::setConfig(const SemanticConfig& config) {
+  auto rule = FusionRule::create(config.rule, config.sbki_prior);  // validates the name
+  if (!(config.length_scale > 0.0) || !(config.beta > 0.0) || !std::isfinite(config.gamma) ||
+      !(config.sigma0 > 0.0) || !(config.drop_percent >= 0.0 && config.drop_percent < 100.0) ||
+      !(config.sbki_prior > 0.0f)) {
+    throw std::invalid_argument(
+        "semantic config out of range: need length_scale, beta, sigma0, sbki_prior > 0, "
+        "finite gamma and drop_percent in [0, 100)");
+  }
+  const bool meaning_changes = config.rule != config_.rule || config.sbki_prior != config_.sbki_prior;
+  if (rule_ && meaning_changes && payload_count_ > 0) {
+    throw std::logic_error("cannot change the fusion rule of a map that holds semantic evidence ('" +
+                           config_.rule + "' -> '" + config.rule + "')");
+  }
+  config_ = config;
+  rule_ = std::move(rule);
+}
+
+// --- integration and queries -----------------------------------------------------------------
+
+InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& points_W,
+                                                 const std::vector<float>& evidence,
+                                                 const octomap::point3d& origin_W) {
+  return ScanIntegrator(config_).integrate(points_W, evidence, origin_W, this);
+}
+
+InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& points_S,
+                                                 const std::vector<float>& evidence,
+                                                 const octomap::pose6d& T_W_S) {
+  octomap::Pointcloud points_W(points_S);
+  points_W.transform(T_W_S);
+  return insertSemanticScan(points_W, evidence, T_W_S.trans());
+}
+
+const float* EvidentialOcTree::payload(const EvidentialOcTreeNode* node) const {
+  return (node && node->hasSemantics()) ? slot(node->payload_) : nullptr;
+}
+
+VoxelOpinion EvidentialOcTree::opinion(const EvidentialOcTreeNode* node) const {
+  if (const float* data = payload(node)) return rule_->readout(data, num_classes_);
+  const std::vector<float> prior(num_classes_, rule_->prior());
+  return rule_->readout(prior.data(), num_classes_);
+}
+
+VoxelOpinion EvidentialOcTree::query(const octomap::point3d& point_W) const {
+  octomap::OcTreeKey key;
+  if (!coordToKeyChecked(point_W, key)) return opinion(nullptr);
+  return query(key);
+}
+
+VoxelOpinion EvidentialOcTree::query(const octomap::OcTreeKey& key, unsigned depth) const {
+  return opinion(search(key, depth));
+}
+
+// --- editing -------------------------------------------------------------------------------------
+
+uint32_t EvidentialOcTree::allocatePayload() {
+  uint32_t index;
+  if (!free_payloads_.empty()) {
+    index = free_payloads_.back();
+    free_payloads_.pop_back();
+  } else {
+    const size_t slots = payloads_.size() / num_classes_;
+    if (slots >= EvidentialOcTreeNode::kNoPayload) throw std::length_error("payload pool is full");
+    index = static_cast<uint32_t>(slots);
+    payloads_.resize(payloads_.size() + num_classes_);
+  }
+  std::fill_n(slot(index), num_classes_, rule_->prior());
+  ++payload_count_;
+  return index;
+}
+
+void EvidentialOcTree::releasePayload(EvidentialOcTreeNode* node) {
+  if (!node->hasSemantics()) return;
+  free_payloads_.push_back(node->payload_);
+  node->payload_ = EvidentialOcTreeNode::kNoPayload;
+  --payload_count_;
+}
+
+float* EvidentialOcTree::payloadForUpdate(EvidentialOcTreeNode* node) {
+  if (!node->hasSemantics()) node->payload_ = allocatePayload();
+  return slot(node->payload_);
+}
+
+void EvidentialOcTree::clearPayload(EvidentialOcTreeNode* node) { releasePayload(node); }
+
+EvidentialOcTreeNode* EvidentialOcTree::leafForUpdate(const octomap::OcTreeKey& key, bool create) {
+  bool created = false;
+  if (!root) {
+    if (!create) return nullptr;
+    root = new EvidentialOcTreeNode();
+    ++tree_size;
+    created = true;
+  }
+  EvidentialOcTreeNode* node = root;
+  for (unsigned depth = 0; depth < tree_depth; ++depth) {
+    const unsigned child = octomap::computeChildIdx(key, tree_depth - 1 - depth);
+    if (!nodeChildExists(node, child)) {
+      if (!created && !nodeHasChildren(node)) {
+        expandNode(node);  // a pruned leaf stands for this voxel: split it
+      } else {
+        if (!create) return nullptr;
+        createNodeChild(node, child);
+        created = true;
+      }
+    }
+    node = getNodeChild(node, child);
+  }
+  return node;
+}
+
+void EvidentialOcTree::updateInnerNodes() {
+  if (root) updateInnerRecurs(root, 0);
+}
+
+void EvidentialOcTree::updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth) {
+  if (!nodeHasChildren(node)) return;
+  const EvidentialOcTreeNode* richest = nullptr;
+  double richest_sum = -std::numeric_limits<double>::infinity();
+  for (unsigned i = 0; i < 8; ++i) {
+    if (!nodeChildExists(node, i)) continue;
+    EvidentialOcTreeNode* child = getNodeChild(node, i);
+    if (depth + 1 < tree_depth) updateInnerRecurs(child, depth + 1);
+    if (child->hasSemantics()) {
+      const float* data = slot(child->payload_);
+      const double sum = std::accumulate(data, data + num_classes_, 0.0);
+      if (sum > richest_sum) {
+        richest_sum = sum;
+        richest = child;
+      }
+    }
+  }
+  node->updateOccupancyChildren();
+  if (richest) {
+    float* dst = payloadForUpdate(node);  // may reallocate the pool: read the source after it
+    std::copy_n(slot(richest->payload_), num_classes_, dst);
+  } else {
+    releasePayload(node);
+  }
+  pruneNode(node);
+}
+
+void EvidentialOcTree::compactPayloads() {
+  std::vector<float> packed;
+  packed.reserve(payload_count_ * num_classes_);
+  std::vector<EvidentialOcTreeNode*> stack;
+  if (root) stack.push_back(root);
+  while (!stack.empty()) {
+    EvidentialOcTreeNode* node = stack.back();
+    stack.pop_back();
+    if (node->hasSemantics()) {
+      const float* data = slot(node->payload_);
+      node->payload_ = static_cast<uint32_t>(packed.size() / num_classes_);
+      packed.insert(packed.end(), data, data + num_classes_);
+    }
+    for (unsigned i = 0; i < 8; ++i) {
+      if (nodeChildExists(node, i)) stack.push_back(getNodeChild(node, i));
+    }
+  }
+  payloads_.swap(packed);
+  payloads_.shrink_to_fit();
+  free_payloads_.clear();
+  payload_count_ = payloads_.size() / num_classes_;
+}
+
+// --- merge ---------------------------------------------------------------------------------------
+
+namespace {
+float clampLogOdds(float value, float lo, float hi) { return std::min(std::max(value, lo), hi); }
+}  // namespace
+
+void EvidentialOcTree::merge(const EvidentialOcTree& other) {
+  if (other.resolution != resolution || other.num_classes_ != num_classes_ ||
+      other.config_.rule != config_.rule || other.config_.sbki_prior != config_.sbki_prior) {
+    throw std::invalid_argument("merge needs maps of equal resolution, class count and rule");
+  }
+  if (!other.root) return;
+  if (!root) {
+    root = new EvidentialOcTreeNode();
+    tree_size = 1;
+    copySubtree(other, other.root, root);
+    return;
+  }
+  // Leaf-level fusion: log-odds add (clamped), payload increments add. Both are commutative.
+  const float prior = rule_->prior();
+  auto fuseLeaf = [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src) {
+    dst->setLogOdds(clampLogOdds(dst->getLogOdds() + src->getLogOdds(), clamping_thres_min,
+                                 clamping_thres_max));
+    if (!src->hasSemantics()) return;
+    float* into = payloadForUpdate(dst);
+    const float* from = other.slot(src->payload_);
+    for (int c = 0; c < num_classes_; ++c) into[c] = (into[c] + from[c]) - prior;
+  };
+  // Applies src (a leaf) to every leaf below dst; children dst lacks become copies of src.
+  std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*, unsigned)> spread =
+      [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src, unsigned depth) {
+        if (!nodeHasChildren(dst)) return fuseLeaf(dst, src);
+        for (unsigned i = 0; i < 8; ++i) {
+          if (nodeChildExists(dst, i)) {
+            spread(getNodeChild(dst, i), src, depth + 1);
+          } else {
+            copySubtree(other, src, createNodeChild(dst, i));
+          }
+        }
+      };
+  std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*, unsigned)> mergeRecurs =
+      [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src, unsigned depth) {
+        if (!other.nodeHasChildren(src)) return spread(dst, src, depth);
+        if (!nodeHasChildren(dst)) expandNode(dst);  // dst is a (pruned) leaf: refine it
+        for (unsigned i = 0; i < 8; ++i) {
+          if (!other.nodeChildExists(src, i)) continue;
+          if (nodeChildExists(dst, i)) {
+            mergeRecurs(getNodeChild(dst, i), other.getNodeChild(src, i), depth + 1);
+          } else {
+            copySubtree(other, other.getNodeChild(src, i), createNodeChild(dst, i));
+          }
+        }
+      };
+  mergeRecurs(root, other.root, 0);
+  updateInnerNodes();
+}
+
+// --- OctoMap overrides -----------------------------------------------------------------------
+
+bool EvidentialOcTree::isNodeCollapsible(const EvidentialOcTreeNode* node) const {
+  if (!nodeChildExists(node, 0)) return false;
+  const EvidentialOcTreeNode* first = getNodeChild(node, 0);
+  if (nodeHasChildren(first)) return false;
+  const float* first_payload = payload(first);
+  for (unsigned i = 1; i < 8; ++i) {
+    if (!nodeChildExists(node, i)) return false;
+    const EvidentialOcTreeNode* child = getNodeChild(node, i);
+    if (nodeHasChildren(child) || child->getValue() != first->getValue()) return false;
+    // Unlike ColorOcTree, semantics must be identical too, so pruning never changes a query.
+    const float* child_payload = payload(child);
+    if ((first_payload == nullptr) != (child_payload == nullptr)) return false;
+    if (first_payload && !std::equal(first_payload, first_payload + num_classes_, child_payload)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+void EvidentialOcTree::expandNode(EvidentialOcTreeNode* node) {
+  OccupancyOcTreeBase<EvidentialOcTreeNode>::expandNode(node);
+  if (!node->hasSemantics()) return;
+  for (unsigned i = 0; i < 8; ++i) {
+    EvidentialOcTreeNode* child = getNodeChild(node, i);
+    float* dst = payloadForUpdate(child);  // may reallocate: read the parent's slot after it
+    std::copy_n(slot(node->payload_), num_classes_, dst);
+  }
+}
+
+bool EvidentialOcTree::pruneNode(EvidentialOcTreeNode* node) {
+  if (!isNodeCollapsible(node)) return false;
+  EvidentialOcTreeNode* first = getNodeChild(node, 0);
+  if (first->hasSemantics()) {
+    float* dst = payloadForUpdate(node);
+    std::copy_n(slot(first->payload_), num_classes_, dst);
+  } else {
+    releasePayload(node);
+  }
+  for (unsigned i = 0; i < 8; ++i) releasePayload(getNodeChild(node, i));
+  // Children are now identical and payload-free: the base deletes them and copies occupancy.
+  return OccupancyOcTreeBase<EvidentialOcTreeNode>::pruneNode(node);
+}
+
+void EvidentialOcTree::clear() {
+  OccupancyOcTreeBase<EvidentialOcTreeNode>::clear();
+  payloads_.clear();
+  free_payloads_.clear();
+  payload_count_ = 0;
+}
+
+size_t EvidentialOcTree::memoryUsage() const {
+  return OccupancyOcTreeBase<EvidentialOcTreeNode>::memoryUsage() +
+         payloads_.capacity() * sizeof(float) + free_payloads_.capacity() * sizeof(uint32_t);
+}
+
+// --- file format: header, nodes (log-odds, child mask, payload flag, payload), end marker ---
+
+std::ostream& EvidentialOcTree::writeData(std::ostream& s) const {
+  writePod(s, kFileMagic);
+  writePod(s, kFileVersion);
+  writePod(s, static_cast<uint32_t>(num_classes_));
+  for (const auto& name : class_names_) writeString(s, name);
+  writeString(s, config_.rule);
+  for (double v : {config_.length_scale, config_.sigma0, config_.beta, config_.gamma,
+                   config_.drop_percent, config_.ds_multiplier, config_.max_range}) {
+    writePod(s, v);
+  }
+  for (bool flag : {config_.adaptive_length, config_.uncertainty_threshold,
+                    config_.reference_compat, config_.kernel_creates_leaves, config_.discretize}) {
+    writePod(s, static_cast<uint8_t>(flag));
+  }
+  writePod(s, config_.sbki_prior);
+  for (float v : {clamping_thres_min, clamping_thres_max, prob_hit_log, prob_miss_log,
+                  occ_prob_thres_log}) {
+    writePod(s, v);
+  }
+  writePod(s, static_cast<uint64_t>(tree_size));
+  if (root) writeNodesRecurs(root, s);
+  writePod(s, kFileEndMagic);
+  return s;
+}
+
+void EvidentialOcTree::writeNodesRecurs(const EvidentialOcTreeNode* node, std::ostream& s) const {
+  writePod(s, node->getValue());
+  uint8_t children = 0;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (nodeChildExists(node, i)) children |= static_cast<uint8_t>(1u << i);
+  }
+  writePod(s, children);
+  writePod(s, static_cast<uint8_t>(node->hasSemantics()));
+  if (node->hasSemantics()) {
+    s.write(reinterpret_cast<const char*>(slot(node->payload_)),
+            static_cast<std::streamsize>(sizeof(float) * num_classes_));
+  }
+  for (unsigned i = 0; i < 8; ++i) {
+    if (children & (1u << i)) writeNodesRecurs(getNodeChild(node, i), s);
+  }
+}
+
+std::istream& EvidentialOcTree::readData(std::istream& s) {
+  read_error_.clear();
+  try {
+    if (root) throw FormatError("cannot read into a tree that is not empty");
+    uint32_t magic = 0, version = 0, num_classes = 0;
+    if (!readPod(s, magic) || magic != kFileMagic) {
+      throw FormatError("no EvidentialOcTree semantic header (corrupt or foreign data)");
+    }
+    if (!readPod(s, version) || version != kFileVersion) {
+      throw FormatError("unsupported EvidentialOcTree file version " + std::to_string(version));
+    }
+    if (!readPod(s, num_classes) || num_classes < 1 || num_classes > kMaxClasses) {
+      throw FormatError("class count out of range: " + std::to_string(num_classes));
+    }
+    setNumClasses(static_cast<int>(num_classes));
+    std::vector<std::string> names(num_classes);
+    for (auto& name : names) {
+      if (!readString(s, name)) throw FormatError("truncated class names");
+    }
+    SemanticConfig config;
+    if (!readString(s, config.rule)) throw FormatError("truncated rule name");
+    for (double* v : {&config.length_scale, &config.sigma0, &config.beta, &config.gamma,
+                      &config.drop_percent, &config.ds_multiplier, &config.max_range}) {
+      if (!readPod(s, *v)) throw FormatError("truncated parameters");
+    }
+    for (bool* flag : {&config.adaptive_length, &config.uncertainty_threshold,
+                       &config.reference_compat, &config.kernel_creates_leaves,
+                       &config.discretize}) {
+      uint8_t byte = 0;
+      if (!readPod(s, byte) || byte > 1) throw FormatError("bad parameter flag");
+      *flag = byte != 0;
+    }
+    if (!readPod(s, config.sbki_prior)) throw FormatError("truncated parameters");
+    float occupancy[5];
+    for (float& v : occupancy) {
+      if (!readPod(s, v) || !std::isfinite(v)) throw FormatError("bad occupancy parameters");
+    }
+    try {
+      setConfig(config);
+    } catch (const std::exception& e) {
+      throw FormatError(std::string("bad semantic parameters: ") + e.what());
+    }
+    setClassNames(names);
+    clamping_thres_min = occupancy[0];
+    clamping_thres_max = occupancy[1];
+    prob_hit_log = occupancy[2];
+    prob_miss_log = occupancy[3];
+    occ_prob_thres_log = occupancy[4];
+    uint64_t expected_nodes = 0;
+    if (!readPod(s, expected_nodes)) throw FormatError("truncated node count");
+    if (expected_nodes > 0) {
+      root = new EvidentialOcTreeNode();
+      tree_size = 1;
+      if (!readNodesRecurs(root, 0, s)) throw FormatError("corrupt or truncated node data");
+    }
+    uint32_t end_magic = 0;
+    if (tree_size != expected_nodes || !readPod(s, end_magic) || end_magic != kFileEndMagic) {
+      throw FormatError("node data does not match its header (corrupt or truncated)");
+    }
+    size_changed = true;
+  } catch (const std::exception& e) {
+    read_error_ = std::string("EvidentialOcTree: ") + e.what();
+    clear();
+    OCTOMAP_ERROR_STR(read_error_);
+    s.setstate(std::ios::failbit);
+  }
+  return s;
+}
+
+bool EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth,
+                                       std::istream& s) {
+  float value = 0.0f;
+  uint8_t children = 0, has_payload = 0;
+  if (!readPod(s, value) || !readPod(s, children) || !readPod(s, has_payload)) return false;
+  if (!std::isfinite(value) || has_payload > 1) return false;
+  if (depth == tree_depth && children != 0) return false;  // deeper than any key
+  node->setValue(value);
+  if (has_payload) {
+    float* data = payloadForUpdate(node);
+    if (!s.read(reinterpret_cast<char*>(data), sizeof(float) * num_classes_)) return false;
+    for (int c = 0; c < num_classes_; ++c) {
+      if (!std::isfinite(data[c])) return false;
+    }
+  }
+  for (unsigned i = 0; i < 8; ++i) {
+    if ((children & (1u << i)) && !readNodesRecurs(createNodeChild(node, i), depth + 1, s)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// --- registration with AbstractOcTree (the ColorOcTree pattern) -----------------------------
+
+EvidentialOcTree::StaticMemberInitializer::StaticMemberInitializer() {
+  auto* tree = new EvidentialOcTree(0.1);
+  tree->clearKeyRays();
+  AbstractOcTree::registerTreeType(tree);
+}
+
+EvidentialOcTree::StaticMemberInitializer EvidentialOcTree::evidential_octree_member_init_;
+
+}  // namespace evidential_octomap

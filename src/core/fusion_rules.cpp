@@ -1,0 +1,136 @@
+// The three fusion rules behind FusionRule (see fusion_rule.h for what each payload holds).
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "evidential_octomap/fusion_rule.h"
+
+namespace evidential_octomap {
+namespace {
+
+int argmaxAbove(const float* values, int num_classes, float floor) {
+  int best = -1;
+  float best_value = floor;
+  for (int c = 0; c < num_classes; ++c) {
+    if (values[c] > best_value) {
+      best_value = values[c];
+      best = c;
+    }
+  }
+  return best;
+}
+
+// Evidence-space Dempster (DESIGN §1, "the stable form"): L^c = sum log1p(e_hat^c / C).
+class DempsterRule : public FusionRule {
+ public:
+  FusionRuleType type() const override { return FusionRuleType::kDempster; }
+  float prior() const override { return 0.0f; }  // vacuous
+  bool usesUncertaintyKernel() const override { return true; }
+  bool uncertaintyIsMass() const override { return true; }
+
+  void contribute(const PointOpinion& point, double k, int num_classes,
+                  double* increments) const override {
+    if (k <= 0.0) return;
+    // Extended belief b~ = k b, u~ = 1 - k (1 - u); e_hat / C = b~ / u~ = k e / (S - k (S - C)).
+    const double factor = k / (point.strength - k * (point.strength - num_classes));
+    for (int c = 0; c < num_classes; ++c) {
+      const float e = point.evidence[c];
+      if (e > 0.0f) increments[c] += std::log1p(e * factor);
+    }
+  }
+
+  VoxelOpinion readout(const float* payload, int num_classes) const override {
+    VoxelOpinion out;
+    out.belief.assign(num_classes, 0.0f);
+    const float m = *std::max_element(payload, payload + num_classes);
+    if (!(m > 0.0f)) return out;  // vacuous: u = 1, no label
+    // u = 1 / (sum e^L - C + 1), b = (e^L - 1) u, scaled by e^-m. Every term below is >= 0,
+    // so nothing cancels: e^(L-m) - e^-m = e^(L-m) * -expm1(-L).
+    const double scale = std::exp(-double(m));
+    double denominator = scale;
+    for (int c = 0; c < num_classes; ++c) {
+      const double mass = std::exp(double(payload[c]) - m) * -std::expm1(-double(payload[c]));
+      out.belief[c] = static_cast<float>(mass);  // divided below
+      denominator += mass;
+    }
+    for (int c = 0; c < num_classes; ++c) out.belief[c] = float(out.belief[c] / denominator);
+    out.uncertainty = static_cast<float>(scale / denominator);
+    out.label = argmaxAbove(payload, num_classes, 0.0f);
+    return out;
+  }
+};
+
+// Dirichlet-count rules (S-BKI and evidential BKI) share their read-out.
+class DirichletRule : public FusionRule {
+ public:
+  explicit DirichletRule(float prior) : prior_(prior) {}
+  float prior() const override { return prior_; }
+  bool uncertaintyIsMass() const override { return false; }
+
+  VoxelOpinion readout(const float* alpha, int num_classes) const override {
+    VoxelOpinion out;
+    out.belief.assign(num_classes, 0.0f);
+    double strength = 0.0;
+    for (int c = 0; c < num_classes; ++c) strength += alpha[c];
+    for (int c = 0; c < num_classes; ++c) out.belief[c] = float(alpha[c] / strength);
+    out.label = argmaxAbove(alpha, num_classes, prior_);
+    if (out.label < 0) {
+      out.uncertainty = float(1.0 / num_classes * (1.0 - 1.0 / num_classes) / (strength + 1.0));
+      return out;
+    }
+    const double p = alpha[out.label] / strength;
+    out.uncertainty = static_cast<float>(p * (1.0 - p) / (strength + 1.0));  // Dirichlet variance
+    return out;
+  }
+
+ private:
+  float prior_;
+};
+
+class SbkiRule : public DirichletRule {
+ public:
+  explicit SbkiRule(float prior) : DirichletRule(prior) {}
+  FusionRuleType type() const override { return FusionRuleType::kSbki; }
+  bool usesUncertaintyKernel() const override { return false; }
+  void contribute(const PointOpinion& point, double k, int, double* increments) const override {
+    if (point.argmax >= 0) increments[point.argmax] += k;
+  }
+};
+
+class EbsRule : public DirichletRule {
+ public:
+  EbsRule() : DirichletRule(1.0f) {}
+  FusionRuleType type() const override { return FusionRuleType::kEbs; }
+  bool usesUncertaintyKernel() const override { return true; }
+  void contribute(const PointOpinion& point, double k, int num_classes,
+                  double* increments) const override {
+    const double scale = k / point.strength;  // p = alpha / S
+    for (int c = 0; c < num_classes; ++c) increments[c] += scale * (point.evidence[c] + 1.0);
+  }
+};
+
+}  // namespace
+
+FusionRuleType fusionRuleFromName(const std::string& name) {
+  for (size_t i = 0; i < kFusionRuleNames.size(); ++i) {
+    if (kFusionRuleNames[i] == name) return static_cast<FusionRuleType>(i);
+  }
+  std::string valid;
+  for (const auto& n : kFusionRuleNames) valid += (valid.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown fusion rule '" + name + "' (valid: " + valid + ")");
+}
+
+std::unique_ptr<FusionRule> FusionRule::create(FusionRuleType type, float sbki_prior) {
+  switch (type) {
+    case FusionRuleType::kDempster: return std::make_unique<DempsterRule>();
+    case FusionRuleType::kSbki: return std::make_unique<SbkiRule>(sbki_prior);
+    case FusionRuleType::kEbs: return std::make_unique<EbsRule>();
+  }
+  throw std::invalid_argument("unknown fusion rule type");
+}
+
+std::unique_ptr<FusionRule> FusionRule::create(const std::string& name, float sbki_prior) {
+  return create(fusionRuleFromName(name), sbki_prior);
+}
+
+}  // namespace evidential_octomap

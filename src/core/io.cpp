@@ -1,0 +1,141 @@
+#include "evidential_octomap/io.h"
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <stdexcept>
+
+#include <octomap/AbstractOcTree.h>
+
+namespace evidential_octomap {
+namespace {
+
+// Writes through `write` into a temporary file beside `path`, fsyncs and renames it over `path`.
+void writeAtomically(const std::string& path, const std::function<bool(std::ostream&)>& write) {
+  const std::string temp = path + ".tmp." + std::to_string(::getpid());
+  {
+    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
+    if (!out) {
+      throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+    }
+    const bool ok = write(out) && out.flush().good();
+    out.close();
+    if (!ok || out.fail()) {
+      std::remove(temp.c_str());
+      throw std::runtime_error("writing " + path + " failed (disk full?)");
+    }
+  }
+  // Make the bytes durable before the rename makes them visible.
+  if (FILE* f = std::fopen(temp.c_str(), "rb")) {
+    ::fsync(fileno(f));
+    std::fclose(f);
+  }
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(temp.c_str());
+    throw std::runtime_error("cannot replace " + path + ": " + why);
+  }
+}
+
+}  // namespace
+
+void saveMap(const EvidentialOcTree& tree, const std::string& path) {
+  writeAtomically(path, [&](std::ostream& s) { return tree.write(s) && s.good(); });
+}
+
+void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path) {
+  writeAtomically(path, [&](std::ostream& s) { return tree.writeBinaryConst(s) && s.good(); });
+}
+
+std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot open " + path + ": " + std::strerror(errno));
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(in));
+  if (!any) {
+    throw std::runtime_error(path + " is not a readable OctoMap .ot file");
+  }
+  auto* tree = dynamic_cast<EvidentialOcTree*>(any.get());
+  if (!tree) {
+    throw std::runtime_error(path + " holds a " + any->getTreeType() +
+                             ", not an EvidentialOcTree");
+  }
+  if (!tree->readError().empty()) throw std::runtime_error(path + ": " + tree->readError());
+  if (in.fail()) throw std::runtime_error(path + ": truncated or corrupt data");
+  any.release();
+  return std::unique_ptr<EvidentialOcTree>(tree);
+}
+
+ClassTable::Rgb uncertaintyColor(double t) {
+  // A perceptually ordered blue -> cyan -> yellow -> red ramp (certain ... uncertain).
+  t = std::isfinite(t) ? std::min(std::max(t, 0.0), 1.0) : 1.0;
+  static const double stops[5][3] = {
+      {48, 18, 59}, {40, 150, 230}, {90, 230, 120}, {250, 200, 40}, {180, 20, 10}};
+  const double x = t * 4.0;
+  const int i = std::min(3, static_cast<int>(x));
+  const double f = x - i;
+  ClassTable::Rgb rgb;
+  for (int c = 0; c < 3; ++c) {
+    rgb[c] = static_cast<uint8_t>(std::lround(stops[i][c] * (1.0 - f) + stops[i + 1][c] * f));
+  }
+  return rgb;
+}
+
+std::unique_ptr<octomap::ColorOcTree> toColorOcTree(const EvidentialOcTree& tree,
+                                                    const ClassTable& classes, ColorMode mode) {
+  if (classes.numClasses() != tree.numClasses()) {
+    throw std::invalid_argument("class table has " + std::to_string(classes.numClasses()) +
+                                " classes, the map " + std::to_string(tree.numClasses()));
+  }
+  // Uncertainty of Dirichlet rules is a variance: scale it by the map's largest value.
+  float max_uncertainty = 1.0f;
+  if (mode == ColorMode::kUncertainty && !tree.rule().uncertaintyIsMass()) {
+    max_uncertainty = 0.0f;
+    for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+      if (tree.payload(&*it)) {
+        max_uncertainty = std::max(max_uncertainty, tree.opinion(&*it).uncertainty);
+      }
+    }
+    if (!(max_uncertainty > 0.0f)) max_uncertainty = 1.0f;
+  }
+  // Same node structure as the source (pruned blocks stay blocks): serialise it in
+  // ColorOcTree's own data format and let ColorOcTree read it.
+  std::stringstream data;
+  std::function<void(const EvidentialOcTreeNode*)> writeNode = [&](const EvidentialOcTreeNode* node) {
+    ClassTable::Rgb rgb{128, 128, 128};  // no semantic evidence
+    if (tree.payload(node)) {
+      const VoxelOpinion o = tree.opinion(node);
+      if (mode == ColorMode::kClass && o.label >= 0) rgb = classes.colors[o.label];
+      if (mode == ColorMode::kUncertainty) rgb = uncertaintyColor(o.uncertainty / max_uncertainty);
+    }
+    const float value = node->getValue();
+    data.write(reinterpret_cast<const char*>(&value), sizeof(value));
+    data.write(reinterpret_cast<const char*>(rgb.data()), 3);
+    uint8_t children = 0;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (tree.nodeChildExists(node, i)) children |= static_cast<uint8_t>(1u << i);
+    }
+    data.write(reinterpret_cast<const char*>(&children), 1);
+    for (unsigned i = 0; i < 8; ++i) {
+      if (children & (1u << i)) writeNode(tree.getNodeChild(node, i));
+    }
+  };
+  auto color_tree = std::make_unique<octomap::ColorOcTree>(tree.getResolution());
+  color_tree->setClampingThresMin(tree.getClampingThresMin());
+  color_tree->setClampingThresMax(tree.getClampingThresMax());
+  color_tree->setProbHit(tree.getProbHit());
+  color_tree->setProbMiss(tree.getProbMiss());
+  color_tree->setOccupancyThres(tree.getOccupancyThres());
+  if (tree.getRoot()) {
+    writeNode(tree.getRoot());
+    color_tree->readData(data);
+  }
+  return color_tree;
+}
+
+}  // namespace evidential_octomap
