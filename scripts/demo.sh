@@ -30,7 +30,12 @@ bash scripts/install_deps.sh
 note "build: core + offline CLI (${core_dir}, Release, -j${jobs})"
 t0=${SECONDS}
 cmake -S . -B "${core_dir}" -DCMAKE_BUILD_TYPE=Release -DEVIDENTIAL_OCTOMAP_ROS=OFF
-cmake --build "${core_dir}" -j"${jobs}"
+# Only the CLI and what it links (scripts/test.sh builds the rest in the same tree).
+target=()
+if cmake --build "${core_dir}" --target help 2>/dev/null | grep -q 'evidential_octomap_cli'; then
+  target=(--target evidential_octomap_cli)
+fi
+cmake --build "${core_dir}" -j"${jobs}" "${target[@]}"
 echo "demo.sh: built in $((SECONDS - t0)) s"
 
 if [[ ! -x "${cli}" ]]; then
