@@ -10,6 +10,7 @@
 
 #include "evidential_octomap/kernel.h"
 #include "evidential_octomap/subjective_logic.h"
+#include "ray_casting.h"
 
 namespace evidential_octomap {
 namespace {
@@ -122,7 +123,7 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
     throw std::invalid_argument("sensor origin is not finite or outside the map's range");
   }
 
-  // 1. Occupancy: OctoMap's own ray casting over the points that have a key.
+  // 1. Occupancy: ray casting with OctoMap's semantics (ray_casting.h), OctoMap's own update.
   auto start = Clock::now();
   octomap::Pointcloud cloud;
   cloud.reserve(n);
@@ -147,8 +148,11 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
     semantic_evidence.push_back(&evidence[i * num_classes]);
   }
   if (cloud.size() == 0) return stats;
-  tree->insertPointCloud(cloud, origin_W, config_.max_range, /*lazy_eval=*/true,
-                         config_.discretize);
+  const int threads = config_.threads > 0 ? config_.threads : omp_get_max_threads();
+  const ScanKeys keys =
+      castRays(*tree, cloud, origin_W, config_.max_range, config_.discretize, threads);
+  for (const octomap::OcTreeKey& voxel : keys.free) tree->updateNode(voxel, false, true);
+  for (const octomap::OcTreeKey& voxel : keys.occupied) tree->updateNode(voxel, true, true);
   stats.ms_occupancy = msSince(start);
 
   // 2. Opinions of the (down-sampled) points, percentile threshold and support lengths.
@@ -208,7 +212,6 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
 
   // 3. One kernel loop: every kept point adds k-weighted increments to each voxel whose centre
   //    lies within its support; per-thread maps, merged afterwards.
-  const int threads = config_.threads > 0 ? config_.threads : omp_get_max_threads();
   std::vector<Aggregate> aggregates(threads);
 #pragma omp parallel num_threads(threads)
   {
