@@ -1,0 +1,86 @@
+#include <filesystem>
+#include <stdexcept>
+
+#include "commands.h"
+
+namespace evidential_octomap::tools {
+
+void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
+  cmd->add_option("--resolution", *resolution, "Voxel size [m]")->capture_default_str();
+  cmd->add_option("--rule", c->rule, "Fusion rule: dempster, sbki or ebs")
+      ->check(CLI::IsMember({"dempster", "sbki", "ebs"}))
+      ->capture_default_str();
+  cmd->add_option("--length-scale", c->length_scale, "Kernel length scale l [m]")
+      ->capture_default_str();
+  cmd->add_option("--sigma0", c->sigma0, "Kernel amplitude")->capture_default_str();
+  cmd->add_option("--beta", c->beta, "Adaptive length factor beta")->capture_default_str();
+  cmd->add_option("--gamma", c->gamma, "Adaptive length decay gamma")->capture_default_str();
+  cmd->add_option("--drop-percent", c->drop_percent,
+                  "Percentage psi of the most uncertain points dropped per scan")
+      ->capture_default_str();
+  cmd->add_flag("!--no-adaptive-length", c->adaptive_length,
+                "Fixed kernel length l (Table II ablation)");
+  cmd->add_flag("!--no-threshold", c->uncertainty_threshold,
+                "Keep the most uncertain points too (Table II ablation)");
+  cmd->add_flag("--reference-compat", c->reference_compat,
+                "gamma = 0, support l*beta*e, as the authors' released code");
+  cmd->add_option("--sbki-prior", c->sbki_prior, "S-BKI prior alpha0")->capture_default_str();
+  cmd->add_option("--ds-multiplier", c->ds_multiplier,
+                  "Semantic input down-sampling at resolution/ds (<= 0: off)")
+      ->capture_default_str();
+  cmd->add_option("--max-range", c->max_range, "Max sensor range [m] (< 0: unlimited)")
+      ->capture_default_str();
+  cmd->add_option("--kernel-creates-leaves", c->kernel_creates_leaves,
+                  "Kernel updates may create leaves in unknown space (true/false)")
+      ->capture_default_str();
+  cmd->add_option("--threads", c->threads, "Threads of the semantic pass (0: OpenMP default)")
+      ->capture_default_str();
+}
+
+void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_name) {
+  cmd->add_option("--evidence", *source_name,
+                  "Evidence source: file (evidence/ or alpha/ of the dataset), onehot, knn-vote, "
+                  "confusion (the last three are derived from hard labels)")
+      ->check(CLI::IsMember({"file", "onehot", "knn-vote", "confusion"}))
+      ->capture_default_str();
+  cmd->add_option("-E,--evidence-magnitude", o->magnitude,
+                  "Evidence magnitude E of derived sources")
+      ->capture_default_str();
+  cmd->add_option("--knn-k", o->knn_k, "Neighbours voting in knn-vote")->capture_default_str();
+  cmd->add_option("--knn-radius", o->knn_radius, "Neighbour radius of knn-vote [m]")
+      ->capture_default_str();
+}
+
+void finishEvidenceOptions(const std::string& source_name, EvidenceOptions* o) {
+  o->source = evidenceSourceFromName(source_name);
+}
+
+std::vector<std::string> captionLines(const std::string& what, const std::string& variant,
+                                      const std::string& evidence, bool derived,
+                                      const std::string& protocol,
+                                      const std::string& predictions_note) {
+  std::vector<std::string> lines;
+  lines.push_back(what + " | " + variant + " | protocol: " + protocol);
+  lines.push_back("evidence: " + evidence +
+                  (derived ? "" : " (network evidence)"));
+  if (!predictions_note.empty()) lines.push_back("predictions: " + predictions_note);
+  return lines;
+}
+
+std::string variantName(const SemanticConfig& c) {
+  std::string v = c.rule;
+  if (c.rule == "dempster") {
+    if (c.reference_compat) v += " reference_compat (gamma=0)";
+    if (!c.adaptive_length) v += " w/o adaptive length";
+    if (!c.uncertainty_threshold) v += " w/o threshold";
+  }
+  return v;
+}
+
+void makeDirectories(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir + ": cannot create directory: " + ec.message());
+}
+
+}  // namespace evidential_octomap::tools

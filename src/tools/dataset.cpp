@@ -1,0 +1,347 @@
+#include "dataset.h"
+
+#include <algorithm>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/LU>
+
+namespace fs = std::filesystem;
+
+namespace evidential_octomap::tools {
+
+namespace {
+
+std::runtime_error fileError(const std::string& file, const std::string& what) {
+  return std::runtime_error(file + ": " + what);
+}
+
+std::vector<char> readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw fileError(path, "cannot open file");
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  in.seekg(0, std::ios::beg);
+  std::vector<char> bytes(static_cast<size_t>(size));
+  if (size > 0 && !in.read(bytes.data(), size)) throw fileError(path, "read failed");
+  return bytes;
+}
+
+std::vector<std::string> sortedStems(const fs::path& dir, const std::string& ext) {
+  std::vector<std::string> stems;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.is_regular_file() && entry.path().extension() == ext) {
+      stems.push_back(entry.path().stem().string());
+    }
+  }
+  std::sort(stems.begin(), stems.end());
+  return stems;
+}
+
+// Path of <dir>/<stem>.bin or .npy when one exists, else empty.
+std::string findMatrixFile(const fs::path& dir, const std::string& stem) {
+  for (const char* ext : {".bin", ".npy"}) {
+    const fs::path p = dir / (stem + ext);
+    if (fs::is_regular_file(p)) return p.string();
+  }
+  return {};
+}
+
+Eigen::Matrix4d rowMajor3x4(const std::vector<double>& v, const std::string& file) {
+  if (v.size() != 12) throw fileError(file, "expected 12 values of a 3x4 matrix");
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) T(r, c) = v[r * 4 + c];
+  return T;
+}
+
+}  // namespace
+
+// --- Scan -----------------------------------------------------------------------------------
+
+Eigen::Vector3f Scan::pointW(size_t i) const {
+  const Eigen::Vector4d p(points_S[i].x(), points_S[i].y(), points_S[i].z(), 1.0);
+  return (T_W_S * p).head<3>().cast<float>();
+}
+
+octomap::Pointcloud Scan::pointsW() const {
+  octomap::Pointcloud cloud;
+  cloud.reserve(points_S.size());
+  for (size_t i = 0; i < points_S.size(); ++i) {
+    const Eigen::Vector3f p = pointW(i);
+    cloud.push_back(p.x(), p.y(), p.z());
+  }
+  return cloud;
+}
+
+// --- low-level readers ------------------------------------------------------------------------
+
+std::vector<float> readVelodyneBin(const std::string& path) {
+  const std::vector<char> bytes = readBytes(path);
+  if (bytes.size() % (4 * sizeof(float)) != 0) {
+    throw fileError(path, "size " + std::to_string(bytes.size()) +
+                              " B is not a multiple of 16 B (float32 x, y, z, remission)");
+  }
+  std::vector<float> values(bytes.size() / sizeof(float));
+  std::memcpy(values.data(), bytes.data(), bytes.size());
+  return values;
+}
+
+std::vector<uint32_t> readLabelFile(const std::string& path) {
+  const std::vector<char> bytes = readBytes(path);
+  if (bytes.size() % sizeof(uint32_t) != 0) {
+    throw fileError(path, "size " + std::to_string(bytes.size()) +
+                              " B is not a multiple of 4 B (uint32 labels)");
+  }
+  std::vector<uint32_t> labels(bytes.size() / sizeof(uint32_t));
+  std::memcpy(labels.data(), bytes.data(), bytes.size());
+  return labels;
+}
+
+std::vector<float> readFloatMatrix(const std::string& path, size_t rows, size_t cols) {
+  const std::vector<char> bytes = readBytes(path);
+  size_t offset = 0;
+  if (fs::path(path).extension() == ".npy") {
+    // NPY v1/v2/v3: magic, version, header length, a Python dict literal, then raw data.
+    if (bytes.size() < 10 || std::memcmp(bytes.data(), "\x93NUMPY", 6) != 0) {
+      throw fileError(path, "not an .npy file (bad magic)");
+    }
+    const int major = static_cast<unsigned char>(bytes[6]);
+    size_t header_len = 0;
+    size_t header_start = 0;
+    if (major == 1) {
+      header_len = static_cast<unsigned char>(bytes[8]) |
+                   (static_cast<size_t>(static_cast<unsigned char>(bytes[9])) << 8);
+      header_start = 10;
+    } else {
+      if (bytes.size() < 12) throw fileError(path, "truncated .npy header");
+      header_len = 0;
+      for (int b = 0; b < 4; ++b) {
+        header_len |= static_cast<size_t>(static_cast<unsigned char>(bytes[8 + b])) << (8 * b);
+      }
+      header_start = 12;
+    }
+    if (header_start + header_len > bytes.size()) throw fileError(path, "truncated .npy header");
+    const std::string header(bytes.data() + header_start, header_len);
+    if (header.find("'<f4'") == std::string::npos) {
+      throw fileError(path, ".npy dtype must be little-endian float32 ('<f4'), header: " + header);
+    }
+    if (header.find("'fortran_order': True") != std::string::npos) {
+      throw fileError(path, ".npy must be C-ordered (fortran_order False)");
+    }
+    offset = header_start + header_len;
+  }
+  const size_t expected = rows * cols * sizeof(float);
+  if (bytes.size() - offset != expected) {
+    throw fileError(path, "holds " + std::to_string((bytes.size() - offset) / sizeof(float)) +
+                              " floats, expected " + std::to_string(rows) + " points x " +
+                              std::to_string(cols) + " classes");
+  }
+  std::vector<float> values(rows * cols);
+  std::memcpy(values.data(), bytes.data() + offset, expected);
+  return values;
+}
+
+Eigen::Matrix4d readKittiCalibTr(const std::string& calib_path) {
+  std::ifstream in(calib_path);
+  if (!in) throw fileError(calib_path, "cannot open calibration file");
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream ss(line);
+    std::string key;
+    ss >> key;
+    if (key != "Tr:") continue;
+    std::vector<double> v;
+    double x;
+    while (ss >> x) v.push_back(x);
+    return rowMajor3x4(v, calib_path);
+  }
+  throw fileError(calib_path, "no 'Tr:' line (Velodyne -> camera transform)");
+}
+
+std::vector<Eigen::Matrix4d> readKittiPoses(const std::string& poses_path) {
+  std::ifstream in(poses_path);
+  if (!in) throw fileError(poses_path, "cannot open poses file");
+  std::vector<Eigen::Matrix4d> poses;
+  std::string line;
+  size_t line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    std::istringstream ss(line);
+    std::vector<double> v;
+    double x;
+    while (ss >> x) v.push_back(x);
+    if (v.size() != 12) {
+      throw fileError(poses_path, "line " + std::to_string(line_no) + " has " +
+                                      std::to_string(v.size()) + " values, expected 12");
+    }
+    poses.push_back(rowMajor3x4(v, poses_path));
+  }
+  return poses;
+}
+
+Eigen::Matrix4d velodynePose(const Eigen::Matrix4d& P_cam, const Eigen::Matrix4d& Tr) {
+  return Tr.inverse() * P_cam * Tr;
+}
+
+std::vector<int> classesOfLabels(const std::vector<uint32_t>& raw, const ClassTable& classes,
+                                 const std::string& file) {
+  std::vector<int> out(raw.size());
+  for (size_t i = 0; i < raw.size(); ++i) {
+    const uint32_t id = raw[i] & 0xFFFFu;
+    const auto it = classes.learning_map.find(id);
+    if (it == classes.learning_map.end()) {
+      throw fileError(file, "unknown label id " + std::to_string(id) + " at point " +
+                                std::to_string(i) + " (not in the learning map of class table '" +
+                                classes.dataset + "')");
+    }
+    out[i] = it->second;
+  }
+  return out;
+}
+
+// --- Dataset ----------------------------------------------------------------------------------
+
+Dataset Dataset::open(const std::string& path, const ClassTable& classes) {
+  Dataset d;
+  d.path_ = path;
+  d.classes_ = &classes;
+  const fs::path root(path);
+  if (!fs::exists(root)) throw std::runtime_error(path + ": no such file or directory");
+
+  const fs::path velodyne = root / "velodyne";
+  if (fs::is_directory(velodyne)) {
+    d.layout_ = Layout::kSemanticKitti;
+    d.stems_ = sortedStems(velodyne, ".bin");
+    if (d.stems_.empty()) throw std::runtime_error(velodyne.string() + ": no .bin scans");
+    const fs::path labels = root / "labels", predictions = root / "predictions";
+    d.has_labels_ = fs::is_directory(labels);
+    d.has_predictions_ = fs::is_directory(predictions);
+    for (const char* dir : {"evidence", "alpha"}) {
+      if (fs::is_directory(root / dir)) {
+        d.evidence_dir_ = (root / dir).string();
+        d.evidence_is_alpha_ = std::string(dir) == "alpha";
+        break;
+      }
+    }
+    const auto P = readKittiPoses((root / "poses.txt").string());
+    const Eigen::Matrix4d Tr = readKittiCalibTr((root / "calib.txt").string());
+    for (const std::string& stem : d.stems_) {
+      d.bin_files_.push_back((velodyne / (stem + ".bin")).string());
+      d.label_files_.push_back(d.has_labels_ ? (labels / (stem + ".label")).string() : "");
+      d.prediction_files_.push_back(
+          d.has_predictions_ ? (predictions / (stem + ".label")).string() : "");
+      if (d.hasEvidence()) {
+        const std::string f = findMatrixFile(d.evidence_dir_, stem);
+        if (f.empty()) {
+          throw std::runtime_error(d.evidence_dir_ + ": no " + stem + ".bin or " + stem + ".npy");
+        }
+        d.evidence_files_.push_back(f);
+      }
+      size_t index = 0;
+      try {
+        index = std::stoul(stem);
+      } catch (const std::exception&) {
+        throw std::runtime_error(d.bin_files_.back() +
+                                 ": scan name is not a number, cannot pick its line in poses.txt");
+      }
+      if (index >= P.size()) {
+        throw std::runtime_error((root / "poses.txt").string() + ": no pose for scan " + stem +
+                                 " (" + std::to_string(P.size()) + " poses)");
+      }
+      d.poses_W_S_.push_back(velodynePose(P[index], Tr));
+    }
+    return d;
+  }
+
+  // Single pose-less scan: the .bin itself, or a directory holding exactly the scan files.
+  d.layout_ = Layout::kSingleScan;
+  fs::path bin;
+  if (fs::is_regular_file(root)) {
+    bin = root;
+  } else {
+    const auto stems = sortedStems(root, ".bin");
+    if (stems.empty()) {
+      throw std::runtime_error(path +
+                               ": neither a SemanticKITTI layout (velodyne/) nor a directory "
+                               "holding a .bin scan");
+    }
+    for (const std::string& stem : stems) {
+      const fs::path b = root / (stem + ".bin");
+      d.stems_.push_back(stem);
+      d.bin_files_.push_back(b.string());
+    }
+  }
+  if (!bin.empty()) {
+    d.stems_.push_back(bin.stem().string());
+    d.bin_files_.push_back(bin.string());
+  }
+  d.has_labels_ = true;
+  for (const std::string& b : d.bin_files_) {
+    fs::path l = fs::path(b).replace_extension(".label");
+    if (!fs::is_regular_file(l)) d.has_labels_ = false;
+    d.label_files_.push_back(l.string());
+    d.prediction_files_.push_back("");
+    d.poses_W_S_.push_back(Eigen::Matrix4d::Identity());
+  }
+  return d;
+}
+
+Scan Dataset::load(size_t i) const {
+  if (i >= stems_.size()) throw std::out_of_range("Dataset::load: scan index out of range");
+  Scan scan;
+  scan.name = stems_[i];
+  scan.T_W_S = poses_W_S_[i];
+  const std::vector<float> xyzr = readVelodyneBin(bin_files_[i]);
+  const size_t n = xyzr.size() / 4;
+
+  auto readClasses = [&](const std::string& file) {
+    const std::vector<uint32_t> raw = readLabelFile(file);
+    if (raw.size() != n) {
+      throw fileError(file, "holds " + std::to_string(raw.size()) + " labels but " +
+                                bin_files_[i] + " holds " + std::to_string(n) + " points");
+    }
+    return classesOfLabels(raw, *classes_, file);
+  };
+  std::vector<int> gt, pred;
+  if (has_labels_) gt = readClasses(label_files_[i]);
+  if (has_predictions_) pred = readClasses(prediction_files_[i]);
+  std::vector<float> ev;
+  const int C = classes_->numClasses();
+  if (hasEvidence()) {
+    ev = readFloatMatrix(evidence_files_[i], n, size_t(C));
+    if (evidence_is_alpha_) {
+      for (float& a : ev) a -= 1.0f;
+    }
+    for (size_t k = 0; k < ev.size(); ++k) {
+      if (!std::isfinite(ev[k]) || ev[k] < 0.0f) {
+        throw fileError(evidence_files_[i],
+                        std::string("invalid ") + (evidence_is_alpha_ ? "alpha" : "evidence") +
+                            " at point " + std::to_string(k / C) + ", class " +
+                            std::to_string(k % C) +
+                            (evidence_is_alpha_ ? " (alpha must be >= 1)" : " (must be >= 0)"));
+      }
+    }
+  }
+
+  scan.points_S.reserve(n);
+  for (size_t k = 0; k < n; ++k) {
+    const float x = xyzr[4 * k], y = xyzr[4 * k + 1], z = xyzr[4 * k + 2];
+    if (x == 0.0f && y == 0.0f && z == 0.0f) {
+      ++scan.dropped_no_return;
+      continue;
+    }
+    scan.points_S.emplace_back(x, y, z);
+    if (!gt.empty()) scan.gt.push_back(gt[k]);
+    if (!pred.empty()) scan.predicted.push_back(pred[k]);
+    if (!ev.empty()) scan.evidence.insert(scan.evidence.end(), ev.begin() + k * C,
+                                          ev.begin() + (k + 1) * C);
+  }
+  return scan;
+}
+
+}  // namespace evidential_octomap::tools

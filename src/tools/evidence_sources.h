@@ -1,0 +1,72 @@
+// Where per-point evidence comes from. A network trained with EDL gives it directly (files);
+// data that ships only hard labels needs it derived, and every output says which was used.
+//   file       evidence/ or alpha/ files of the dataset (real network output)
+//   onehot     e = E * onehot(prediction)                       (derived from hard labels)
+//   knn-vote   votes of the k nearest same-scan neighbours within radius r:
+//              e^c = E * n_c^2 / (k * n)   (n neighbours found incl. the point, n_c voting c),
+//              i.e. E * (n/k) * (n_c/n)^2: full and unanimous neighbourhoods give E,
+//              sparse ones (n < k) and mixed ones (class borders) give less, so u rises there.
+//   confusion  e^c = E * P(p|p) * P(c|p), p the prediction, P(gt = c | pred = p) estimated on
+//              *other* scans only (leave-one-scan-out) and smoothed towards the global accuracy;
+//              u is constant per predicted class and larger for the less precise classes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "dataset.h"
+
+namespace evidential_octomap::tools {
+
+enum class EvidenceSource { kFile, kOneHot, kKnnVote, kConfusion };
+
+struct EvidenceOptions {
+  EvidenceSource source = EvidenceSource::kOneHot;
+  float magnitude = 20.0f;   // E
+  int knn_k = 8;
+  double knn_radius = 0.5;   // [m]
+};
+
+EvidenceSource evidenceSourceFromName(const std::string& name);  // throws std::invalid_argument
+std::string evidenceSourceName(EvidenceSource source);
+bool derivedFromHardLabels(EvidenceSource source);
+// One line for captions and reports, e.g. "onehot, E=20 (derived from hard labels)".
+std::string describeEvidence(const EvidenceOptions& options);
+
+// Per-class confusion counts of each scan, so that the evidence of scan i can be estimated from
+// the other scans of a calibration set only.
+class ConfusionModel {
+ public:
+  explicit ConfusionModel(int num_classes, int ignore_class);
+  // Counts (gt, predicted) of one scan; GT points of the ignore class are skipped.
+  void addScan(size_t scan_index, const std::vector<int>& gt, const std::vector<int>& predicted);
+  // P(gt = c | pred = p) from every added scan except `exclude_scan`, C x C row = p.
+  // Smoothed: (n_pc + m * prior_pc) / (n_p + m), prior = global accuracy on the diagonal, the
+  // rest spread evenly, m = 10 pseudo-points.
+  std::vector<double> conditional(size_t exclude_scan) const;
+  size_t numScans() const { return per_scan_.size(); }
+
+ private:
+  int num_classes_;
+  int ignore_class_;
+  std::vector<std::pair<size_t, std::vector<uint64_t>>> per_scan_;  // C x C, row = predicted
+};
+
+// N x C evidence of `scan` from `options`. For kConfusion, `model` must hold scans other than
+// `scan_index`. Throws std::runtime_error when the needed input (predictions, files) is missing.
+std::vector<float> deriveEvidence(const Scan& scan, size_t scan_index,
+                                  const EvidenceOptions& options, int num_classes,
+                                  const ConfusionModel* model);
+
+std::vector<float> oneHotEvidence(const std::vector<int>& predicted, int num_classes,
+                                  float magnitude);
+// O(N) grid search: points hashed into cells of size `radius`, neighbours from the 27 cells.
+std::vector<float> knnVoteEvidence(const std::vector<Eigen::Vector3f>& points,
+                                   const std::vector<int>& predicted, int num_classes, int k,
+                                   double radius, float magnitude);
+std::vector<float> confusionEvidence(const std::vector<int>& predicted,
+                                     const std::vector<double>& conditional, int num_classes,
+                                     float magnitude);
+
+}  // namespace evidential_octomap::tools

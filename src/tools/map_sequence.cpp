@@ -1,0 +1,130 @@
+// `evidential_octomap map`: map a SemanticKITTI-layout sequence (or one pose-less scan), then
+// write map.ot, metrics.json, metrics.md and the top-down renders.
+#include <iostream>
+#include <memory>
+
+#include "commands.h"
+#include "dataset.h"
+#include "evidential_octomap/io.h"
+#include "pipeline.h"
+#include "render.h"
+#include "report.h"
+#include "synthetic.h"
+
+namespace evidential_octomap::tools {
+
+namespace {
+
+struct MapOptions {
+  std::string data, classes, out = "out/map";
+  std::string protocol = "reconstruction";
+  size_t scans = 0;
+  SemanticConfig config;
+  double resolution = 0.2;
+  EvidenceOptions evidence;
+  std::string evidence_name = "onehot";
+  bool synthetic = false;
+  NoiseModel noise;
+  bool render = true;
+  bool quiet = false;
+};
+
+void runMap(const MapOptions& o) {
+  EvidenceOptions ev = o.evidence;
+  finishEvidenceOptions(o.evidence_name, &ev);
+  const ClassTable classes = ClassTable::load(o.classes);
+  const Dataset dataset = Dataset::open(o.data, classes);
+  std::vector<Scan> scans = loadScans(dataset, o.scans, !o.quiet);
+  std::string predictions_note;
+  if (o.synthetic) {
+    for (Scan& s : scans) {
+      s.predicted = syntheticPredictions(s.points_S, s.gt, classes.numClasses(),
+                                         classes.ignore_class, o.noise);
+    }
+    predictions_note = o.noise.describe();
+  }
+  const Protocol protocol = makeProtocol(o.protocol, scans.size());
+  const auto evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes);
+  MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,
+                          !o.quiet, "mapping");
+  const std::vector<Query> queries = buildQueries(scans, protocol.query_scans,
+                                                  classes.ignore_class);
+
+  RunReport r;
+  r.dataset = o.data;
+  r.protocol = protocol.name;
+  for (size_t s : protocol.map_scans) r.map_scans.push_back(scans[s].name);
+  for (size_t s : protocol.query_scans) r.query_scans.push_back(scans[s].name);
+  r.variant = variantName(o.config);
+  r.evidence_source = evidenceSourceName(ev.source);
+  r.evidence_description = describeEvidence(ev);
+  r.evidence_derived = derivedFromHardLabels(ev.source);
+  r.predictions_note = predictions_note;
+  r.config = run.tree->config();
+  r.resolution = o.resolution;
+  r.map = evaluateMap(*run.tree, queries, classes.ignore_class);
+  r.input = evaluatePredictions(queries, classes.numClasses(), classes.ignore_class);
+  r.ms_per_scan = run.ms_per_scan;
+  r.totals = run.total;
+  fillTreeStats(*run.tree, &r);
+
+  makeDirectories(o.out);
+  saveMap(*run.tree, o.out + "/map.ot");
+  writeText(o.out + "/metrics.json", toJson(r, classes).dump(2) + "\n");
+  const std::string md = toMarkdown(r, classes);
+  writeText(o.out + "/metrics.md", md);
+  if (o.render) {
+    const TopDownGrid grid = makeGrid(*run.tree, &queries);
+    auto caption = [&](const std::string& what) {
+      return captionLines(what, r.variant, r.evidence_description, r.evidence_derived, r.protocol,
+                          r.predictions_note);
+    };
+    writePng(o.out + "/semantic.png", renderSemantic(*run.tree, classes, grid, caption("semantic map")));
+    writePng(o.out + "/uncertainty.png",
+             renderUncertainty(*run.tree, r.map.scale, grid, caption("uncertainty")));
+    writePng(o.out + "/error.png",
+             renderError(*run.tree, queries, grid, caption("errors of the GT queries")));
+  }
+  std::cout << md << "\nwrote " << o.out << "/{map.ot,metrics.json,metrics.md"
+            << (o.render ? ",semantic.png,uncertainty.png,error.png" : "") << "}\n";
+}
+
+}  // namespace
+
+void addMapCommand(CLI::App& app) {
+  auto o = std::make_shared<MapOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "map",
+      "Map a SemanticKITTI-layout sequence (velodyne/, labels/, predictions/ or evidence/, "
+      "poses.txt, calib.txt) or one pose-less scan; write map.ot, metrics.json, metrics.md, "
+      "semantic.png, uncertainty.png, error.png");
+  cmd->add_option("--data", o->data, "Dataset directory (or a single .bin scan)")
+      ->required()
+      ->check(CLI::ExistingPath);
+  cmd->add_option("--classes", o->classes, "Class table YAML (config/classes_*.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
+  cmd->add_option("--protocol", o->protocol,
+                  "reconstruction (query the mapped scans) or held-out (map the first half, "
+                  "query the second)")
+      ->check(CLI::IsMember({"reconstruction", "held-out"}))
+      ->capture_default_str();
+  cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
+      ->capture_default_str();
+  addConfigOptions(cmd, &o->config, &o->resolution);
+  addEvidenceOptions(cmd, &o->evidence, &o->evidence_name);
+  cmd->add_flag("--synthetic-predictions", o->synthetic,
+                "Replace predictions by GT corrupted with the synthetic noise model (for data "
+                "without predictions, e.g. RELLIS-3D)");
+  cmd->add_option("--noise-point-rate", o->noise.point_rate, "Synthetic point-noise rate")
+      ->capture_default_str();
+  cmd->add_option("--noise-region-rate", o->noise.region_rate, "Synthetic region-flip rate")
+      ->capture_default_str();
+  cmd->add_option("--noise-seed", o->noise.seed, "Synthetic noise seed")->capture_default_str();
+  cmd->add_flag("!--no-render", o->render, "Skip the PNG renders");
+  cmd->add_flag("-q,--quiet", o->quiet, "No progress bars");
+  cmd->callback([o]() { runMap(*o); });
+}
+
+}  // namespace evidential_octomap::tools

@@ -1,0 +1,127 @@
+#include "pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+#include <stdexcept>
+
+#include "progress_bar.h"
+
+namespace evidential_octomap::tools {
+
+Protocol makeProtocol(const std::string& name, size_t num_scans) {
+  Protocol p;
+  p.name = name;
+  if (name == "reconstruction") {
+    for (size_t i = 0; i < num_scans; ++i) p.map_scans.push_back(i);
+    p.query_scans = p.map_scans;
+  } else if (name == "held-out") {
+    if (num_scans < 2) throw std::invalid_argument("held-out protocol needs at least 2 scans");
+    const size_t half = num_scans / 2;
+    for (size_t i = 0; i < num_scans; ++i) (i < half ? p.map_scans : p.query_scans).push_back(i);
+  } else {
+    throw std::invalid_argument("unknown protocol '" + name +
+                                "' (valid: reconstruction, held-out)");
+  }
+  return p;
+}
+
+std::vector<Scan> loadScans(const Dataset& dataset, size_t limit, bool progress) {
+  const size_t n = limit == 0 ? dataset.size() : std::min(limit, dataset.size());
+  std::vector<Scan> scans;
+  scans.reserve(n);
+  ProgressBar bar(n, "loading", "scan", progress ? -1 : 0);
+  for (size_t i = 0; i < n; ++i) {
+    scans.push_back(dataset.load(i));
+    bar.tick();
+  }
+  return scans;
+}
+
+std::vector<Query> buildQueries(const std::vector<Scan>& scans, const std::vector<size_t>& which,
+                                int ignore_class) {
+  std::vector<Query> queries;
+  for (size_t s : which) {
+    const Scan& scan = scans.at(s);
+    if (scan.gt.size() != scan.size()) {
+      throw std::runtime_error("scan " + scan.name + " has no ground-truth labels to query");
+    }
+    const bool has_pred = scan.predicted.size() == scan.size();
+    for (size_t i = 0; i < scan.size(); ++i) {
+      if (scan.gt[i] < 0 || scan.gt[i] == ignore_class) continue;
+      const Eigen::Vector3f p = scan.pointW(i);
+      queries.push_back({octomap::point3d(p.x(), p.y(), p.z()), scan.gt[i],
+                         has_pred ? scan.predicted[i] : -1});
+    }
+  }
+  return queries;
+}
+
+std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans,
+                                                  const std::vector<size_t>& which,
+                                                  const EvidenceOptions& options,
+                                                  const ClassTable& classes) {
+  const int C = classes.numClasses();
+  ConfusionModel model(C, classes.ignore_class);
+  if (options.source == EvidenceSource::kConfusion) {
+    for (size_t s : which) {
+      const Scan& scan = scans.at(s);
+      if (scan.gt.size() != scan.size() || scan.predicted.size() != scan.size()) {
+        throw std::runtime_error("confusion evidence needs GT and predictions, scan " + scan.name +
+                                 " lacks one");
+      }
+      model.addScan(s, scan.gt, scan.predicted);
+    }
+  }
+  std::vector<std::vector<float>> evidence(scans.size());
+  for (size_t s : which) evidence[s] = deriveEvidence(scans.at(s), s, options, C, &model);
+  return evidence;
+}
+
+double MapRun::ms_median() const {
+  if (ms_per_scan.empty()) return 0.0;
+  std::vector<double> v = ms_per_scan;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double MapRun::ms_mean() const {
+  if (ms_per_scan.empty()) return 0.0;
+  return std::accumulate(ms_per_scan.begin(), ms_per_scan.end(), 0.0) / ms_per_scan.size();
+}
+
+MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& which,
+                  const std::vector<std::vector<float>>& evidence, const ClassTable& classes,
+                  const SemanticConfig& config, double resolution, bool progress,
+                  const std::string& label) {
+  MapRun run;
+  run.tree = std::make_unique<EvidentialOcTree>(resolution, classes.numClasses(), config);
+  run.tree->setClassNames(classes.names);
+  ProgressBar bar(which.size(), label, "scan", progress ? -1 : 0);
+  for (size_t s : which) {
+    const Scan& scan = scans.at(s);
+    const octomap::Pointcloud points_W = scan.pointsW();
+    const Eigen::Vector3d o = scan.originW();
+    const auto t0 = std::chrono::steady_clock::now();
+    const InsertStats st = run.tree->insertSemanticScan(
+        points_W, evidence.at(s), octomap::point3d(float(o.x()), float(o.y()), float(o.z())));
+    const auto t1 = std::chrono::steady_clock::now();
+    run.ms_per_scan.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    InsertStats& t = run.total;
+    t.points_in += st.points_in;
+    t.points_skipped += st.points_skipped;
+    t.points_beyond_range += st.points_beyond_range;
+    t.semantic_points += st.semantic_points;
+    t.points_dropped_uncertain += st.points_dropped_uncertain;
+    t.uncertainty_threshold = st.uncertainty_threshold;
+    t.voxels_updated += st.voxels_updated;
+    t.ms_occupancy += st.ms_occupancy;
+    t.ms_kernel += st.ms_kernel;
+    t.ms_update += st.ms_update;
+    bar.tick();
+  }
+  return run;
+}
+
+}  // namespace evidential_octomap::tools

@@ -1,0 +1,58 @@
+// The mapping run shared by `map`, `compare` and the end-to-end tests: load scans, derive their
+// evidence, insert them into an EvidentialOcTree (timed), build queries, evaluate.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dataset.h"
+#include "evidence_sources.h"
+#include "evidential_octomap/class_table.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/semantic_config.h"
+
+namespace evidential_octomap::tools {
+
+// Which scans are mapped and which are queried.
+//   reconstruction: map scans 0..n-1, query the same scans;
+//   held-out:       map the first half (0..n/2-1), query the second half (n/2..n-1).
+struct Protocol {
+  std::string name;
+  std::vector<size_t> map_scans;
+  std::vector<size_t> query_scans;
+};
+Protocol makeProtocol(const std::string& name, size_t num_scans);  // throws std::invalid_argument
+
+// Loads scans 0..n-1 of the dataset (n = min(limit, size), limit 0 = all), with a progress bar.
+std::vector<Scan> loadScans(const Dataset& dataset, size_t limit, bool progress);
+
+// GT-labelled points (gt != ignore_class) of `which` scans in the world frame, with the input's
+// prediction of each (-1 when the scan has none).
+std::vector<Query> buildQueries(const std::vector<Scan>& scans, const std::vector<size_t>& which,
+                                int ignore_class);
+
+// Evidence of each scan in `which` (indexed like `scans`; other entries stay empty). The
+// confusion source is estimated leave-one-scan-out over `which` only, so query scans of the
+// held-out protocol never calibrate the map.
+std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans,
+                                                  const std::vector<size_t>& which,
+                                                  const EvidenceOptions& options,
+                                                  const ClassTable& classes);
+
+struct MapRun {
+  std::unique_ptr<EvidentialOcTree> tree;
+  std::vector<double> ms_per_scan;  // insertSemanticScan wall time, per mapped scan
+  InsertStats total;                // summed over scans (uncertainty_threshold: last scan)
+  double ms_median() const;
+  double ms_mean() const;
+};
+
+// Inserts scans `which` (in order) with their evidence into a new tree.
+MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& which,
+                  const std::vector<std::vector<float>>& evidence, const ClassTable& classes,
+                  const SemanticConfig& config, double resolution, bool progress,
+                  const std::string& label = "mapping");
+
+}  // namespace evidential_octomap::tools

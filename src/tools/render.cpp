@@ -1,0 +1,244 @@
+#include "render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "evidential_octomap/io.h"
+
+namespace evidential_octomap::tools {
+
+namespace {
+
+const cv::Vec3b kBackground(255, 255, 255);
+const cv::Vec3b kNoSemantics(200, 200, 200);
+constexpr int kLine = 20;
+constexpr int kPanel = 220;
+
+cv::Vec3b bgr(const ClassTable::Rgb& rgb) { return cv::Vec3b(rgb[2], rgb[1], rgb[0]); }
+
+// Top-most occupied leaf of every pixel column: the node pointer and its z.
+struct TopLeaf {
+  const EvidentialOcTreeNode* node = nullptr;
+  double z = -std::numeric_limits<double>::infinity();
+};
+
+std::vector<TopLeaf> topLeaves(const EvidentialOcTree& tree, const TopDownGrid& g) {
+  std::vector<TopLeaf> top(size_t(g.width) * g.height);
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const double half = 0.5 * it.getSize();
+    int c0, r0, c1, r1;
+    // Pixel range of the leaf's footprint (rows grow downwards, so r1 < r0).
+    if (!g.toPixel(it.getX() - half + 1e-6, it.getY() - half + 1e-6, &c0, &r0)) continue;
+    if (!g.toPixel(it.getX() + half - 1e-6, it.getY() + half - 1e-6, &c1, &r1)) continue;
+    const double z = it.getZ();
+    for (int r = r1; r <= r0; ++r)
+      for (int c = c0; c <= c1; ++c) {
+        TopLeaf& t = top[size_t(r) * g.width + c];
+        if (z > t.z) t = {&*it, z};
+      }
+  }
+  return top;
+}
+
+// Caption above, side panel right, map in between.
+cv::Mat compose(const cv::Mat& map, const std::vector<std::string>& caption, cv::Mat* panel) {
+  const int top = kLine * int(caption.size()) + 8;
+  const int h = std::max(map.rows + top, top + 300);
+  cv::Mat canvas(h, map.cols + kPanel, CV_8UC3, cv::Scalar(255, 255, 255));
+  map.copyTo(canvas(cv::Rect(0, top, map.cols, map.rows)));
+  cv::rectangle(canvas, cv::Rect(0, top, map.cols, map.rows), cv::Scalar(120, 120, 120), 1);
+  for (size_t i = 0; i < caption.size(); ++i) {
+    cv::putText(canvas, caption[i], cv::Point(6, kLine * int(i + 1)), cv::FONT_HERSHEY_SIMPLEX,
+                0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  }
+  *panel = canvas(cv::Rect(map.cols, top, kPanel, h - top));
+  return canvas;
+}
+
+void legendEntry(cv::Mat& panel, int row, const cv::Vec3b& color, const std::string& text) {
+  const int y = 10 + row * kLine;
+  cv::rectangle(panel, cv::Rect(10, y, 14, 14), cv::Scalar(color[0], color[1], color[2]),
+                cv::FILLED);
+  cv::rectangle(panel, cv::Rect(10, y, 14, 14), cv::Scalar(0, 0, 0), 1);
+  cv::putText(panel, text, cv::Point(30, y + 12), cv::FONT_HERSHEY_SIMPLEX, 0.45,
+              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+}
+
+void drawScaleBar(cv::Mat& map, const TopDownGrid& g) {
+  const double metres = 20.0;
+  const int len = int(std::lround(metres / g.pixel));
+  if (len + 20 > map.cols || map.rows < 30) return;
+  const cv::Point a(10, map.rows - 12), b(10 + len, map.rows - 12);
+  cv::line(map, a, b, cv::Scalar(0, 0, 0), 2);
+  cv::putText(map, "20 m", cv::Point(10, map.rows - 18), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+}
+
+}  // namespace
+
+bool TopDownGrid::toPixel(double x, double y, int* col, int* row) const {
+  const int c = int(std::floor((x - x0) / pixel));
+  const int r = height - 1 - int(std::floor((y - y0) / pixel));
+  if (c < 0 || c >= width || r < 0 || r >= height) return false;
+  *col = c;
+  *row = r;
+  return true;
+}
+
+TopDownGrid makeGrid(const EvidentialOcTree& tree, const std::vector<Query>* queries,
+                     int max_pixels) {
+  double xmin = std::numeric_limits<double>::infinity(), ymin = xmin;
+  double xmax = -xmin, ymax = -xmin;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const double half = 0.5 * it.getSize();
+    xmin = std::min(xmin, it.getX() - half);
+    xmax = std::max(xmax, it.getX() + half);
+    ymin = std::min(ymin, it.getY() - half);
+    ymax = std::max(ymax, it.getY() + half);
+  }
+  if (queries) {
+    for (const Query& q : *queries) {
+      xmin = std::min(xmin, double(q.point_W.x()));
+      xmax = std::max(xmax, double(q.point_W.x()));
+      ymin = std::min(ymin, double(q.point_W.y()));
+      ymax = std::max(ymax, double(q.point_W.y()));
+    }
+  }
+  TopDownGrid g;
+  if (!(xmin < xmax && ymin < ymax)) return g;  // empty map: 1 x 1
+  g.pixel = tree.getResolution();
+  const double extent = std::max(xmax - xmin, ymax - ymin);
+  if (extent / g.pixel > max_pixels) g.pixel = extent / max_pixels;
+  g.x0 = xmin;
+  g.y0 = ymin;
+  g.width = std::max(1, int(std::ceil((xmax - xmin) / g.pixel)) + 1);
+  g.height = std::max(1, int(std::ceil((ymax - ymin) / g.pixel)) + 1);
+  return g;
+}
+
+cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
+                       const TopDownGrid& g, const std::vector<std::string>& caption) {
+  cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
+  std::set<int> shown;
+  const auto top = topLeaves(tree, g);
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) {
+      const TopLeaf& t = top[size_t(r) * g.width + c];
+      if (!t.node) continue;
+      const int label = t.node->hasSemantics() ? tree.opinion(t.node).label : -1;
+      if (label >= 0 && label < classes.numClasses()) {
+        map.at<cv::Vec3b>(r, c) = bgr(classes.colors[label]);
+        shown.insert(label);
+      } else {
+        map.at<cv::Vec3b>(r, c) = kNoSemantics;
+      }
+    }
+  drawScaleBar(map, g);
+  cv::Mat panel;
+  cv::Mat canvas = compose(map, caption, &panel);
+  int row = 0;
+  for (int label : shown) legendEntry(panel, row++, bgr(classes.colors[label]), classes.names[label]);
+  legendEntry(panel, row++, kNoSemantics, "occupied, no label");
+  return canvas;
+}
+
+cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& scale,
+                          const TopDownGrid& g, const std::vector<std::string>& caption) {
+  cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
+  const auto top = topLeaves(tree, g);
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) {
+      const TopLeaf& t = top[size_t(r) * g.width + c];
+      if (!t.node) continue;
+      if (!t.node->hasSemantics()) {
+        map.at<cv::Vec3b>(r, c) = kNoSemantics;
+        continue;
+      }
+      map.at<cv::Vec3b>(r, c) = bgr(uncertaintyColor(scale.apply(tree.opinion(t.node).uncertainty)));
+    }
+  drawScaleBar(map, g);
+  cv::Mat panel;
+  cv::Mat canvas = compose(map, caption, &panel);
+  // Vertical colour bar: certain (0) at the bottom, uncertain (1) at the top.
+  const int bar_h = std::min(240, panel.rows - 60);
+  for (int y = 0; y < bar_h; ++y) {
+    const double t = 1.0 - double(y) / std::max(1, bar_h - 1);
+    const cv::Vec3b col = bgr(uncertaintyColor(t));
+    cv::line(panel, cv::Point(14, 20 + y), cv::Point(40, 20 + y),
+             cv::Scalar(col[0], col[1], col[2]));
+  }
+  cv::rectangle(panel, cv::Rect(14, 20, 27, bar_h), cv::Scalar(0, 0, 0), 1);
+  auto label = [&](int y, const std::string& text) {
+    cv::putText(panel, text, cv::Point(48, y), cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(0, 0, 0),
+                1, cv::LINE_AA);
+  };
+  std::ostringstream hi, lo;
+  hi << std::setprecision(3) << (scale.scaled ? scale.max : 1.0);
+  lo << std::setprecision(3) << (scale.scaled ? scale.min : 0.0);
+  label(30, "u = " + hi.str() + (scale.scaled ? " (max)" : ""));
+  label(20 + bar_h, "u = " + lo.str() + (scale.scaled ? " (min)" : ""));
+  label(40 + bar_h, scale.scaled ? "min-max scaled" : "u is a mass");
+  legendEntry(panel, (bar_h + 50) / kLine, kNoSemantics, "no evidence");
+  return canvas;
+}
+
+cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& queries,
+                    const TopDownGrid& g, const std::vector<std::string>& caption) {
+  // Per pixel: counts of right / wrong / uncovered queries, drawn as a colour mix.
+  std::vector<cv::Vec3i> counts(size_t(g.width) * g.height, cv::Vec3i(0, 0, 0));
+  for (const Query& q : queries) {
+    int c, r;
+    if (!g.toPixel(q.point_W.x(), q.point_W.y(), &c, &r)) continue;
+    const EvidentialOcTreeNode* node = tree.search(q.point_W);
+    int kind = 2;  // uncovered
+    if (node && tree.isNodeOccupied(node)) {
+      const int label = node->hasSemantics() ? tree.opinion(node).label : -1;
+      kind = label == q.gt ? 0 : 1;
+    }
+    ++counts[size_t(r) * g.width + c][kind];
+  }
+  const cv::Vec3d colors[3] = {{60, 170, 40}, {30, 30, 220}, {200, 140, 60}};  // BGR
+  cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) {
+      const cv::Vec3i& n = counts[size_t(r) * g.width + c];
+      const int total = n[0] + n[1] + n[2];
+      if (total == 0) continue;
+      cv::Vec3d mix(0, 0, 0);
+      for (int k = 0; k < 3; ++k) mix += colors[k] * (double(n[k]) / total);
+      map.at<cv::Vec3b>(r, c) = cv::Vec3b(cv::saturate_cast<uchar>(mix[0]),
+                                          cv::saturate_cast<uchar>(mix[1]),
+                                          cv::saturate_cast<uchar>(mix[2]));
+    }
+  drawScaleBar(map, g);
+  cv::Mat panel;
+  cv::Mat canvas = compose(map, caption, &panel);
+  legendEntry(panel, 0, cv::Vec3b(60, 170, 40), "right");
+  legendEntry(panel, 1, cv::Vec3b(30, 30, 220), "wrong / no label");
+  legendEntry(panel, 2, cv::Vec3b(200, 140, 60), "uncovered (free/unknown)");
+  cv::putText(panel, "colours mix per pixel", cv::Point(10, 80), cv::FONT_HERSHEY_SIMPLEX, 0.4,
+              cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  return canvas;
+}
+
+void writePng(const std::string& path, const cv::Mat& image) {
+  bool ok = false;
+  try {
+    ok = cv::imwrite(path, image);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(path + ": cannot write PNG: " + e.what());
+  }
+  if (!ok) throw std::runtime_error(path + ": cannot write PNG");
+}
+
+}  // namespace evidential_octomap::tools

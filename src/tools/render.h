@@ -1,0 +1,40 @@
+// Top-down PNG renders of a map (OpenCV, tools only): semantic classes with a legend,
+// uncertainty with a colour bar, and errors of the evaluation queries (right / wrong / uncovered).
+// Each column of the map shows its highest occupied leaf; north (+y) is up.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "evidential_octomap/class_table.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/metrics.h"
+
+namespace evidential_octomap::tools {
+
+struct TopDownGrid {
+  double x0 = 0.0, y0 = 0.0;  // world coordinates of the lower-left corner
+  double pixel = 0.2;         // metres per pixel
+  int width = 1, height = 1;
+  bool toPixel(double x, double y, int* col, int* row) const;
+};
+
+// Bounds of the occupied leaves (and the queries, when given); pixel = resolution, coarsened so
+// that neither side exceeds max_pixels.
+TopDownGrid makeGrid(const EvidentialOcTree& tree, const std::vector<Query>* queries,
+                     int max_pixels = 1600);
+
+// caption: lines printed above the image (rule, evidence source, protocol, ...).
+cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
+                       const TopDownGrid& grid, const std::vector<std::string>& caption);
+cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& scale,
+                          const TopDownGrid& grid, const std::vector<std::string>& caption);
+cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& queries,
+                    const TopDownGrid& grid, const std::vector<std::string>& caption);
+
+// Throws std::runtime_error naming the path when the PNG cannot be written.
+void writePng(const std::string& path, const cv::Mat& image);
+
+}  // namespace evidential_octomap::tools

@@ -1,0 +1,50 @@
+// Metrics reports of one mapping run: JSON (every parameter, the evidence source, the protocol)
+// and markdown. Captions and the markdown say when evidence is derived from hard labels and when
+// predictions are synthetic.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "evidential_octomap/class_table.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/semantic_config.h"
+
+namespace evidential_octomap::tools {
+
+struct RunReport {
+  std::string dataset;                   // path given on the command line
+  std::string protocol;                  // reconstruction | held-out
+  std::vector<std::string> map_scans;    // scan names mapped
+  std::vector<std::string> query_scans;  // scan names queried
+  std::string variant;                   // e.g. "dempster", "dempster w/o adaptive length"
+  std::string evidence_source;           // file | onehot | knn-vote | confusion | unknown
+  std::string evidence_description;      // describeEvidence()
+  bool evidence_derived = true;          // derived from hard labels
+  std::string predictions_note;          // e.g. synthetic noise model; empty for real ones
+  SemanticConfig config;
+  double resolution = 0.2;
+  MapMetrics map;
+  PredictionMetrics input;
+  std::vector<double> ms_per_scan;
+  InsertStats totals;
+  size_t leaves = 0, semantic_nodes = 0, memory_bytes = 0;
+};
+
+// Every SemanticConfig field, parsed from SemanticConfig::print (so new fields appear too).
+nlohmann::json configJson(const SemanticConfig& config);
+nlohmann::json toJson(const RunReport& report, const ClassTable& classes);
+std::string toMarkdown(const RunReport& report, const ClassTable& classes);
+// Fills leaves / semantic_nodes / memory_bytes from the tree.
+void fillTreeStats(const EvidentialOcTree& tree, RunReport* report);
+
+// Writes text to a file; throws std::runtime_error naming the path.
+void writeText(const std::string& path, const std::string& text);
+
+double median(std::vector<double> values);
+std::string percent(double fraction, int decimals = 1);  // "38.0", "nan" -> "–"
+
+}  // namespace evidential_octomap::tools
