@@ -40,6 +40,14 @@ class EvidentialOcTreeNode : public octomap::OcTreeNode {
   uint32_t payload_ = kNoPayload;
 };
 
+// One voxel's share of a scan: an occupancy update and/or a row of semantic increments.
+struct VoxelUpdate {
+  static constexpr uint32_t kNoIncrements = 0xFFFFFFFFu;
+  octomap::OcTreeKey key;
+  int8_t occupancy = 0;                 // -1 miss, +1 hit, 0 none
+  uint32_t increments = kNoIncrements;  // row of C values in the increments array
+};
+
 // What one call of insertSemanticScan did.
 struct InsertStats {
   size_t points_in = 0;             // points handed in
@@ -105,6 +113,13 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // The node's payload, allocated with the rule's prior first if it had none.
   float* payloadForUpdate(EvidentialOcTreeNode* node);
   void clearPayload(EvidentialOcTreeNode* node);
+  // Applies a whole scan in one pass over the tree: updates are sorted in Morton order (so every
+  // subtree is visited once), missing leaves are created for occupancy updates (and for
+  // semantic ones when `create_semantic_leaves`), pruned blocks are split only where something
+  // changes, and only the inner nodes above touched leaves are recomputed (and pruned).
+  // `increments` holds C values per row. Returns the number of leaves whose payload changed.
+  size_t applyUpdates(std::vector<VoxelUpdate> updates, const std::vector<double>& increments,
+                      bool create_semantic_leaves);
   // Recomputes inner occupancy and inner semantic summaries bottom-up, then prunes.
   // Inner summary: a copy of the payload of the child holding the most evidence (largest sum).
   void updateInnerNodes();
@@ -137,6 +152,11 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   void copySubtree(const EvidentialOcTree& from, const EvidentialOcTreeNode* src,
                    EvidentialOcTreeNode* dst);
   void updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth);
+  void updateInnerNode(EvidentialOcTreeNode* node);
+  struct UpdateBatch;
+  size_t applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
+                            const VoxelUpdate* begin, const VoxelUpdate* end,
+                            const UpdateBatch& batch);
   void writeNodesRecurs(const EvidentialOcTreeNode* node, std::ostream& s) const;
   bool readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, std::istream& s);
 

@@ -220,19 +220,26 @@ void EvidentialOcTree::updateInnerNodes() {
 
 void EvidentialOcTree::updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth) {
   if (!nodeHasChildren(node)) return;
+  if (depth + 1 < tree_depth) {
+    for (unsigned i = 0; i < 8; ++i) {
+      if (nodeChildExists(node, i)) updateInnerRecurs(getNodeChild(node, i), depth + 1);
+    }
+  }
+  updateInnerNode(node);
+}
+
+void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node) {
   const EvidentialOcTreeNode* richest = nullptr;
   double richest_sum = -std::numeric_limits<double>::infinity();
   for (unsigned i = 0; i < 8; ++i) {
     if (!nodeChildExists(node, i)) continue;
-    EvidentialOcTreeNode* child = getNodeChild(node, i);
-    if (depth + 1 < tree_depth) updateInnerRecurs(child, depth + 1);
-    if (child->hasSemantics()) {
-      const float* data = slot(child->payload_);
-      const double sum = std::accumulate(data, data + num_classes_, 0.0);
-      if (sum > richest_sum) {
-        richest_sum = sum;
-        richest = child;
-      }
+    const EvidentialOcTreeNode* child = getNodeChild(node, i);
+    if (!child->hasSemantics()) continue;
+    const float* data = slot(child->payload_);
+    const double sum = std::accumulate(data, data + num_classes_, 0.0);
+    if (sum > richest_sum) {
+      richest_sum = sum;
+      richest = child;
     }
   }
   node->updateOccupancyChildren();
@@ -243,6 +250,112 @@ void EvidentialOcTree::updateInnerRecurs(EvidentialOcTreeNode* node, unsigned de
     releasePayload(node);
   }
   pruneNode(node);
+}
+
+// --- batched scan update ---------------------------------------------------------------------
+
+namespace {
+uint64_t spreadBits(uint64_t v) {  // the 16 bits of v to every third bit
+  v &= 0xFFFF;
+  v = (v | (v << 16)) & 0x0000FF0000FFull;
+  v = (v | (v << 8)) & 0x00F00F00F00Full;
+  v = (v | (v << 4)) & 0x0C30C30C30C3ull;
+  v = (v | (v << 2)) & 0x249249249249ull;
+  return v;
+}
+// Morton code with OctoMap's child order (z, y, x from most to least significant), so that a
+// sorted run of keys is also sorted by child index at every depth.
+uint64_t mortonCode(const octomap::OcTreeKey& k) {
+  return spreadBits(k[2]) << 2 | spreadBits(k[1]) << 1 | spreadBits(k[0]);
+}
+}  // namespace
+
+struct EvidentialOcTree::UpdateBatch {
+  const std::vector<double>& increments;
+  bool create_semantic_leaves;
+};
+
+size_t EvidentialOcTree::applyUpdates(std::vector<VoxelUpdate> updates,
+                                      const std::vector<double>& increments,
+                                      bool create_semantic_leaves) {
+  if (updates.empty()) return 0;
+  std::vector<std::pair<uint64_t, uint32_t>> order(updates.size());
+  for (size_t i = 0; i < updates.size(); ++i) order[i] = {mortonCode(updates[i].key), uint32_t(i)};
+  std::sort(order.begin(), order.end());
+  // Sorted and merged per key: occupancy from the ray set, increments from the kernel.
+  std::vector<VoxelUpdate> sorted;
+  sorted.reserve(updates.size());
+  for (size_t i = 0; i < order.size(); ++i) {
+    const VoxelUpdate& u = updates[order[i].second];
+    if (i > 0 && order[i].first == order[i - 1].first) {
+      VoxelUpdate& merged = sorted.back();
+      merged.occupancy = std::max(merged.occupancy, u.occupancy);  // a hit wins over a miss
+      if (u.increments != VoxelUpdate::kNoIncrements) merged.increments = u.increments;
+    } else {
+      sorted.push_back(u);
+    }
+  }
+  bool is_new = false;
+  if (!root) {
+    root = new EvidentialOcTreeNode();
+    ++tree_size;
+    is_new = true;
+  }
+  const UpdateBatch batch{increments, create_semantic_leaves};
+  const size_t changed =
+      applyUpdatesRecurs(root, 0, is_new, sorted.data(), sorted.data() + sorted.size(), batch);
+  size_changed = true;
+  return changed;
+}
+
+size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth,
+                                            bool is_new, const VoxelUpdate* begin,
+                                            const VoxelUpdate* end, const UpdateBatch& batch) {
+  if (depth == tree_depth) {  // one voxel, one merged update
+    if (begin->occupancy != 0) {
+      updateNodeLogOdds(node, begin->occupancy > 0 ? prob_hit_log : prob_miss_log);
+    }
+    if (begin->increments == VoxelUpdate::kNoIncrements) return 0;
+    float* payload = payloadForUpdate(node);
+    const double* add = &batch.increments[size_t(begin->increments) * num_classes_];
+    for (int c = 0; c < num_classes_; ++c) payload[c] += static_cast<float>(add[c]);
+    return 1;
+  }
+  if (!is_new && !nodeHasChildren(node)) {
+    // A pruned block: misses on a block at the lower clamp, or hits on one at the upper clamp,
+    // change nothing (OctoMap's early abort); anything else splits it.
+    const bool at_min = node->getLogOdds() <= clamping_thres_min;
+    const bool at_max = node->getLogOdds() >= clamping_thres_max;
+    bool unchanged = at_min || at_max;
+    for (const VoxelUpdate* u = begin; unchanged && u != end; ++u) {
+      unchanged = u->increments == VoxelUpdate::kNoIncrements &&
+                  ((at_min && u->occupancy < 0) || (at_max && u->occupancy > 0));
+    }
+    if (unchanged) return 0;
+    expandNode(node);
+  }
+  const int level = static_cast<int>(tree_depth - 1 - depth);
+  size_t changed = 0;
+  for (const VoxelUpdate* first = begin; first != end;) {
+    const unsigned child = octomap::computeChildIdx(first->key, level);
+    const VoxelUpdate* last = first;
+    bool needs_leaf = false;
+    while (last != end && octomap::computeChildIdx(last->key, level) == child) {
+      needs_leaf |= last->occupancy != 0 || batch.create_semantic_leaves;
+      ++last;
+    }
+    bool created = false;
+    if (!nodeChildExists(node, child) && needs_leaf) {
+      createNodeChild(node, child);
+      created = true;
+    }
+    if (nodeChildExists(node, child)) {
+      changed += applyUpdatesRecurs(getNodeChild(node, child), depth + 1, created, first, last, batch);
+    }
+    first = last;
+  }
+  if (nodeHasChildren(node)) updateInnerNode(node);
+  return changed;
 }
 
 void EvidentialOcTree::compactPayloads() {

@@ -17,19 +17,6 @@ octomap::OcTreeKey unpack(uint64_t v) {
                             static_cast<octomap::key_type>(v));
 }
 
-// Spreads the 16 bits of v to every third bit.
-uint64_t spread3(uint64_t v) {
-  v &= 0xFFFF;
-  v = (v | (v << 16)) & 0x0000FF0000FFull;
-  v = (v | (v << 8)) & 0x00F00F00F00Full;
-  v = (v | (v << 4)) & 0x0C30C30C30C3ull;
-  v = (v | (v << 2)) & 0x249249249249ull;
-  return v;
-}
-uint64_t morton(uint64_t packed) {
-  return spread3(packed >> 32) << 2 | spread3(packed >> 16) << 1 | spread3(packed);
-}
-
 // Open-addressing set of packed keys; ~10x faster than std::unordered_set for the tens of
 // millions of ray keys a scan produces. Packed keys use 48 bits, so all-ones marks empty.
 class KeySet {
@@ -85,15 +72,6 @@ class KeySet {
   size_t size_ = 0;
 };
 
-std::vector<octomap::OcTreeKey> toMortonOrder(std::vector<uint64_t>& packed) {
-  std::vector<std::pair<uint64_t, uint64_t>> coded(packed.size());
-  for (size_t i = 0; i < packed.size(); ++i) coded[i] = {morton(packed[i]), packed[i]};
-  std::sort(coded.begin(), coded.end());
-  std::vector<octomap::OcTreeKey> keys(coded.size());
-  for (size_t i = 0; i < coded.size(); ++i) keys[i] = unpack(coded[i].second);
-  return keys;
-}
-
 }  // namespace
 
 ScanKeys castRays(const EvidentialOcTree& tree, const octomap::Pointcloud& points_W,
@@ -114,7 +92,7 @@ ScanKeys castRays(const EvidentialOcTree& tree, const octomap::Pointcloud& point
     for (size_t i = 0; i < points_W.size(); ++i) ends.push_back(points_W.getPoint(i));
   }
 
-  std::vector<KeySet> free_sets(threads, KeySet(1 << 16));
+  std::vector<KeySet> free_sets(threads, KeySet(1 << 20));
   std::vector<std::vector<uint64_t>> occupied_lists(threads);
 #pragma omp parallel num_threads(threads)
   {
@@ -141,17 +119,13 @@ ScanKeys castRays(const EvidentialOcTree& tree, const octomap::Pointcloud& point
   KeySet& free_all = free_sets[0];
   for (int t = 1; t < threads; ++t) free_sets[t].forEach([&](uint64_t v) { free_all.insert(v); });
 
-  std::vector<uint64_t> free_packed, occupied_packed;
-  free_packed.reserve(free_all.size());
-  free_all.forEach([&](uint64_t v) {
-    if (!occupied.contains(v)) free_packed.push_back(v);  // occupied wins
-  });
-  occupied_packed.reserve(occupied.size());
-  occupied.forEach([&](uint64_t v) { occupied_packed.push_back(v); });
-
   ScanKeys keys;
-  keys.free = toMortonOrder(free_packed);
-  keys.occupied = toMortonOrder(occupied_packed);
+  keys.free.reserve(free_all.size());
+  free_all.forEach([&](uint64_t v) {
+    if (!occupied.contains(v)) keys.free.push_back(unpack(v));  // occupied wins
+  });
+  keys.occupied.reserve(occupied.size());
+  occupied.forEach([&](uint64_t v) { keys.occupied.push_back(unpack(v)); });
   return keys;
 }
 

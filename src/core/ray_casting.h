@@ -1,7 +1,6 @@
 // Ray casting of one scan, with the semantics of OctoMap's computeUpdate / computeDiscreteUpdate
 // (free: voxels a ray crosses before its end voxel; occupied: end voxels within max range; a
-// voxel that is both is occupied), but computed in parallel without OctoMap's shared lock and
-// returned in Morton order, so that updating the tree afterwards walks neighbouring paths.
+// voxel that is both is occupied), but computed in parallel without OctoMap's shared lock.
 // Private to the core (not installed).
 #pragma once
 

@@ -123,7 +123,7 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
     throw std::invalid_argument("sensor origin is not finite or outside the map's range");
   }
 
-  // 1. Occupancy: ray casting with OctoMap's semantics (ray_casting.h), OctoMap's own update.
+  // 1. Occupancy keys: ray casting with OctoMap's semantics (ray_casting.h).
   auto start = Clock::now();
   octomap::Pointcloud cloud;
   cloud.reserve(n);
@@ -151,8 +151,6 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   const int threads = config_.threads > 0 ? config_.threads : omp_get_max_threads();
   const ScanKeys keys =
       castRays(*tree, cloud, origin_W, config_.max_range, config_.discretize, threads);
-  for (const octomap::OcTreeKey& voxel : keys.free) tree->updateNode(voxel, false, true);
-  for (const octomap::OcTreeKey& voxel : keys.occupied) tree->updateNode(voxel, true, true);
   stats.ms_occupancy = msSince(start);
 
   // 2. Opinions of the (down-sampled) points, percentile threshold and support lengths.
@@ -244,17 +242,16 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   }
   stats.ms_kernel = msSince(start);
 
-  // 4. Each touched leaf is updated once; then inner nodes and pruning.
+  // 4. One pass over the tree: occupancy and semantic updates, each touched leaf once, then the
+  //    inner nodes above them.
   start = Clock::now();
-  for (const auto& [voxel, index] : total.rows) {
-    EvidentialOcTreeNode* leaf = tree->leafForUpdate(voxel, config_.kernel_creates_leaves);
-    if (!leaf) continue;
-    float* payload = tree->payloadForUpdate(leaf);
-    const double* increments = &total.increments[size_t(index) * num_classes];
-    for (int c = 0; c < num_classes; ++c) payload[c] += static_cast<float>(increments[c]);
-    ++stats.voxels_updated;
-  }
-  tree->updateInnerNodes();
+  std::vector<VoxelUpdate> updates;
+  updates.reserve(keys.free.size() + keys.occupied.size() + total.rows.size());
+  for (const octomap::OcTreeKey& voxel : keys.free) updates.push_back({voxel, -1});
+  for (const octomap::OcTreeKey& voxel : keys.occupied) updates.push_back({voxel, +1});
+  for (const auto& [voxel, index] : total.rows) updates.push_back({voxel, 0, index});
+  stats.voxels_updated =
+      tree->applyUpdates(std::move(updates), total.increments, config_.kernel_creates_leaves);
   stats.ms_update = msSince(start);
   return stats;
 }
