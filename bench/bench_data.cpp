@@ -1,0 +1,189 @@
+#include "bench_data.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <array>
+#include <fstream>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include <evidential_octomap/class_table.h>
+#include <evidential_octomap/subjective_logic.h>
+
+namespace evbench {
+namespace {
+
+using Mat4 = std::array<double, 16>;  // row-major
+
+Mat4 identity() { return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; }
+
+Mat4 fromRow12(const std::vector<double>& v) {
+  Mat4 m = identity();
+  std::copy(v.begin(), v.begin() + 12, m.begin());
+  return m;
+}
+
+Mat4 multiply(const Mat4& a, const Mat4& b) {
+  Mat4 c{};
+  for (int r = 0; r < 4; ++r)
+    for (int k = 0; k < 4; ++k)
+      for (int col = 0; col < 4; ++col) c[r * 4 + col] += a[r * 4 + k] * b[k * 4 + col];
+  return c;
+}
+
+// Inverse of a rigid (or near-rigid) 3x4 transform: [R t]^-1 = [R^T  -R^T t].
+Mat4 inverseRigid(const Mat4& m) {
+  Mat4 inv = identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) inv[r * 4 + c] = m[c * 4 + r];
+  for (int r = 0; r < 3; ++r) {
+    double t = 0.0;
+    for (int c = 0; c < 3; ++c) t -= inv[r * 4 + c] * m[c * 4 + 3];
+    inv[r * 4 + 3] = t;
+  }
+  return inv;
+}
+
+std::vector<double> parseNumbers(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<double> out;
+  double v;
+  while (in >> v) out.push_back(v);
+  return out;
+}
+
+template <typename T>
+std::vector<T> readBinary(const std::string& path) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) throw std::runtime_error("cannot open " + path);
+  const std::streamsize bytes = in.tellg();
+  if (bytes % static_cast<std::streamsize>(sizeof(T)) != 0) {
+    throw std::runtime_error(path + ": size is not a multiple of " + std::to_string(sizeof(T)));
+  }
+  in.seekg(0);
+  std::vector<T> data(static_cast<size_t>(bytes) / sizeof(T));
+  if (!in.read(reinterpret_cast<char*>(data.data()), bytes)) {
+    throw std::runtime_error("cannot read " + path);
+  }
+  return data;
+}
+
+std::string scanName(int i) {
+  char name[16];
+  std::snprintf(name, sizeof(name), "%06d", i);
+  return name;
+}
+
+}  // namespace
+
+std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& class_yaml,
+                                 int count, int* num_classes) {
+  const auto classes = evidential_octomap::ClassTable::load(class_yaml);
+  *num_classes = classes.numClasses();
+
+  Mat4 tr;
+  bool have_tr = false;
+  {
+    std::ifstream calib(folder + "/calib.txt");
+    if (!calib) throw std::runtime_error("cannot open " + folder + "/calib.txt");
+    std::string line;
+    while (std::getline(calib, line)) {
+      if (line.rfind("Tr:", 0) == 0) {
+        const auto v = parseNumbers(line.substr(3));
+        if (v.size() != 12) throw std::runtime_error("calib.txt: Tr needs 12 numbers");
+        tr = fromRow12(v);
+        have_tr = true;
+      }
+    }
+  }
+  if (!have_tr) throw std::runtime_error(folder + "/calib.txt has no Tr line");
+  const Mat4 tr_inv = inverseRigid(tr);
+
+  std::ifstream poses(folder + "/poses.txt");
+  if (!poses) throw std::runtime_error("cannot open " + folder + "/poses.txt");
+  std::vector<Scan> scans;
+  std::string line;
+  for (int i = 0; i < count; ++i) {
+    if (!std::getline(poses, line)) throw std::runtime_error("poses.txt has fewer lines than scans");
+    const auto v = parseNumbers(line);
+    if (v.size() != 12) throw std::runtime_error("poses.txt line " + std::to_string(i + 1));
+    const Mat4 t = multiply(tr_inv, multiply(fromRow12(v), tr));  // T_world_velo
+
+    const auto xyzi = readBinary<float>(folder + "/velodyne/" + scanName(i) + ".bin");
+    const auto labels = readBinary<uint32_t>(folder + "/predictions/" + scanName(i) + ".label");
+    if (xyzi.size() % 4 != 0 || labels.size() != xyzi.size() / 4) {
+      throw std::runtime_error("scan " + scanName(i) + ": point and label counts differ");
+    }
+    Scan scan;
+    const size_t n = labels.size();
+    scan.points_W.reserve(n);
+    scan.classes.resize(n);
+    for (size_t j = 0; j < n; ++j) {
+      const double x = xyzi[4 * j], y = xyzi[4 * j + 1], z = xyzi[4 * j + 2];
+      scan.points_W.push_back(float(t[0] * x + t[1] * y + t[2] * z + t[3]),
+                              float(t[4] * x + t[5] * y + t[6] * z + t[7]),
+                              float(t[8] * x + t[9] * y + t[10] * z + t[11]));
+      scan.classes[j] = classes.classOfRaw(labels[j]);
+    }
+    scan.origin_W = octomap::point3d(float(t[3]), float(t[7]), float(t[11]));
+    scans.push_back(std::move(scan));
+  }
+  return scans;
+}
+
+std::vector<float> derivedEvidence(const std::vector<int>& classes, int num_classes,
+                                   float magnitude) {
+  std::vector<float> evidence(classes.size() * size_t(num_classes));
+  for (size_t i = 0; i < classes.size(); ++i) {
+    evidential_octomap::evidenceFromLabel(classes[i], num_classes, magnitude,
+                                          &evidence[i * num_classes]);
+  }
+  return evidence;
+}
+
+Scan subsample(const Scan& scan, size_t target, uint32_t seed) {
+  const size_t n = scan.points_W.size();
+  if (target >= n) return scan;
+  std::vector<uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  std::mt19937 rng(seed);
+  for (size_t i = 0; i < target; ++i) {
+    std::uniform_int_distribution<size_t> pick(i, n - 1);
+    std::swap(order[i], order[pick(rng)]);
+  }
+  std::sort(order.begin(), order.begin() + target);  // keep the scan order (ring structure)
+  Scan out;
+  out.origin_W = scan.origin_W;
+  out.points_W.reserve(target);
+  out.classes.reserve(target);
+  for (size_t i = 0; i < target; ++i) {
+    out.points_W.push_back(scan.points_W.getPoint(order[i]));
+    out.classes.push_back(scan.classes[order[i]]);
+  }
+  return out;
+}
+
+double median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+double peakRssMb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;  // KiB on Linux
+}
+
+double currentRssMb() {
+  std::ifstream statm("/proc/self/statm");
+  long pages_total = 0, pages_resident = 0;
+  statm >> pages_total >> pages_resident;
+  return pages_resident * 4096.0 / (1024.0 * 1024.0);
+}
+
+}  // namespace evbench

@@ -1,0 +1,45 @@
+// Bench-only helpers: the bundled SemanticKITTI scans in the world frame, derived evidence,
+// timers and process memory. Nothing here is part of the library.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <octomap/Pointcloud.h>
+
+namespace evbench {
+
+using Clock = std::chrono::steady_clock;
+inline double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// One scan: points already in the world frame (T_world_velo = inv(Tr) * P(i) * Tr), the sensor
+// origin, and the class id of every point (predictions through the class table's learning map).
+struct Scan {
+  octomap::Pointcloud points_W;
+  octomap::point3d origin_W;
+  std::vector<int> classes;
+};
+
+// Loads scans 0..count-1 of a SemanticKITTI-style folder (velodyne/, predictions/, poses.txt,
+// calib.txt). Throws std::runtime_error naming the file on any problem.
+std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& class_yaml,
+                                 int count, int* num_classes);
+
+// "Derived" evidence: one-hot of the predicted class with magnitude `magnitude` (N x C).
+std::vector<float> derivedEvidence(const std::vector<int>& classes, int num_classes,
+                                   float magnitude = 20.0f);
+
+// A random subset of `target` points (fixed seed; the whole scan when it has fewer points).
+Scan subsample(const Scan& scan, size_t target, uint32_t seed);
+
+double median(std::vector<double> values);
+
+// Peak resident set size of this process [MB] (getrusage ru_maxrss), and current RSS [MB].
+double peakRssMb();
+double currentRssMb();
+
+}  // namespace evbench
