@@ -38,6 +38,10 @@ Scan subsample(const Scan& scan, size_t target, uint32_t seed);
 
 double median(std::vector<double> values);
 
+// CPU time of the whole process (all threads) [ms]: robust to other load on the machine, unlike
+// wall time. For a single-threaded call it equals the wall time on an idle core.
+double processCpuMs();
+
 // Peak resident set size of this process [MB] (getrusage ru_maxrss), and current RSS [MB].
 double peakRssMb();
 double currentRssMb();

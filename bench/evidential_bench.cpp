@@ -75,7 +75,8 @@ struct Series {
   int threads = 1;
   bool discretize = false;
   std::string rule;
-  std::vector<std::vector<double>> total, occupancy, kernel, update;  // [scan][repeat]
+  std::vector<std::vector<double>> total, occupancy, kernel, update;  // wall ms [scan][repeat]
+  std::vector<std::vector<double>> cpu;                               // process CPU ms
   std::vector<size_t> points;                                        // per scan
   size_t semantic_points = 0, voxels_updated = 0;                    // summed over the sequence
   evbench::MapFingerprint fingerprint;                               // final map (plain, prototype)
@@ -235,8 +236,10 @@ struct Runner {
   void plain(Series* series, TreeStats* stats) const {
     octomap::OcTree tree(resolution);
     for (size_t i = 0; i < scans.size(); ++i) {
+      const double cpu0 = evbench::processCpuMs();
       const double ms = evbench::plainInsert(tree, scans[i].points_W, scans[i].origin_W,
                                              series->max_range, series->discretize);
+      record(series->cpu, i, evbench::processCpuMs() - cpu0);
       record(series->total, i, ms);
       if (series->points.size() <= i) series->points.push_back(scans[i].points_W.size());
     }
@@ -248,10 +251,12 @@ struct Runner {
   void plainPhases(Series* series) const {
     octomap::OcTree tree(resolution);
     for (size_t i = 0; i < scans.size(); ++i) {
+      const double cpu0 = evbench::processCpuMs();
       const auto start = Clock::now();
       const auto t = evbench::plainInsertPhases(&tree, scans[i].points_W, scans[i].origin_W,
                                                 series->max_range, series->discretize);
       record(series->total, i, msSince(start));
+      record(series->cpu, i, evbench::processCpuMs() - cpu0);
       record(series->occupancy, i, t.ms_keys);
       record(series->update, i, t.ms_update);
       record(series->kernel, i, 0.0);
@@ -265,10 +270,12 @@ struct Runner {
     octomap::OcTree tree(resolution);
     evbench::FastOccupancy fast(series->threads);
     for (size_t i = 0; i < scans.size(); ++i) {
+      const double cpu0 = evbench::processCpuMs();
       const auto start = Clock::now();
       const auto t = fast.insert(&tree, scans[i].points_W, scans[i].origin_W, series->max_range,
                                  series->discretize);
       record(series->total, i, msSince(start));
+      record(series->cpu, i, evbench::processCpuMs() - cpu0);
       record(series->occupancy, i, t.ms_keys);
       record(series->update, i, t.ms_update);
       record(series->kernel, i, 0.0);
@@ -288,9 +295,11 @@ struct Runner {
     omp_set_num_threads(series->threads);
     EvidentialOcTree tree(resolution, num_classes, config);
     for (size_t i = 0; i < scans.size(); ++i) {
+      const double cpu0 = evbench::processCpuMs();
       const auto start = Clock::now();
       const auto s = tree.insertSemanticScan(scans[i].points_W, evidence[i], scans[i].origin_W);
       record(series->total, i, msSince(start));
+      record(series->cpu, i, evbench::processCpuMs() - cpu0);
       record(series->occupancy, i, s.ms_occupancy);
       record(series->kernel, i, s.ms_kernel);
       record(series->update, i, s.ms_update);
@@ -314,6 +323,9 @@ Json seriesJson(const Series& s) {
   j.set("ms_per_scan", s.medians(s.total));
   j.set("ms_per_scan_median", s.medianOfScans(s.total));
   j.set("ms_total", s.sum(s.total));
+  j.set("cpu_ms_per_scan", s.medians(s.cpu));
+  j.set("cpu_ms_per_scan_median", s.medianOfScans(s.cpu));
+  j.set("cpu_ms_total", s.sum(s.cpu));
   const double points = double(s.totalPoints());
   j.set("points_per_scan", points / std::max<size_t>(1, s.points.size()));
   j.set("points_per_second", points / (s.sum(s.total) / 1000.0));
@@ -582,9 +594,16 @@ int main(int argc, char** argv) try {
     sum_line("ratio_semantic2t_vs_plain_discretize_" + tag, ratio_d,
              "semantic insert (2 thr) / plain insertPointCloud discretize, range " + rangeName(r) +
                  ": " + fmt(ratio_d, 3) + "x");
+    const double cpu_ratio = sem2.sum(sem2.cpu) / plain.sum(plain.cpu);
+    sum_line("cpu_ratio_semantic2t_vs_plain_" + tag, cpu_ratio,
+             "CPU time (all threads) semantic insert (2 thr) / plain insertPointCloud, range " +
+                 rangeName(r) + ": " + fmt(cpu_ratio, 3) + "x");
     sum_line("ms_per_scan_semantic2t_" + tag, sem2.medianOfScans(sem2.total),
              "semantic insert (2 thr) median ms/scan, range " + rangeName(r) + ": " +
                  fmt(sem2.medianOfScans(sem2.total)));
+    sum_line("cpu_ms_per_scan_semantic2t_" + tag, sem2.medianOfScans(sem2.cpu),
+             "semantic insert (2 thr) median CPU ms/scan (all threads), range " + rangeName(r) +
+                 ": " + fmt(sem2.medianOfScans(sem2.cpu)));
     sum_line("ms_per_scan_plain_" + tag, plain.medianOfScans(plain.total),
              "plain insertPointCloud median ms/scan, range " + rangeName(r) + ": " +
                  fmt(plain.medianOfScans(plain.total)));
@@ -705,9 +724,10 @@ int main(int argc, char** argv) try {
   const auto& sem_ref = find("semantic", -1.0, 2, true);
   md << "### Per-scan insert time (" << scans.size() << " scans, map growing, median of "
      << o.repeats << " run(s) per scan index; ratio = sum over the scans)\n\n";
-  md << "| max range | method | threads | median ms/scan | points/s | ratio to plain | ratio to "
-        "plain discretize | occupancy ms | kernel ms | update ms |\n";
-  md << "|---|---|---|---|---|---|---|---|---|---|\n";
+  md << "| max range | method | threads | median wall ms/scan | points/s | wall ratio to plain | "
+        "wall ratio to plain discretize | median CPU ms/scan | CPU ratio to plain | occupancy ms | "
+        "kernel ms | update ms |\n";
+  md << "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& s : main_series) {
     const Series& plain = find("plain", s.max_range, 1, false);
     const Series& plain_d = find("plain", s.max_range, 1, true);
@@ -716,7 +736,9 @@ int main(int argc, char** argv) try {
        << (s.kind == "semantic" ? " (" + s.rule + ")" : "") << " | " << s.threads << " | "
        << fmt(s.medianOfScans(s.total)) << " | " << fmt(pps / 1e3, 0) << " k | "
        << fmt(s.sum(s.total) / plain.sum(plain.total), 3) << " | "
-       << fmt(s.sum(s.total) / plain_d.sum(plain_d.total), 3) << " | ";
+       << fmt(s.sum(s.total) / plain_d.sum(plain_d.total), 3) << " | "
+       << fmt(s.medianOfScans(s.cpu)) << " | " << fmt(s.sum(s.cpu) / plain.sum(plain.cpu), 3)
+       << " | ";
     if (s.kind == "semantic") {
       md << fmt(s.medianOfScans(s.occupancy)) << " | " << fmt(s.medianOfScans(s.kernel)) << " | "
          << fmt(s.medianOfScans(s.update)) << " |\n";
