@@ -1,0 +1,254 @@
+// End to end: the `evidential_octomap` binary on 2 bundled scans, checked against a second,
+// independent computation of the metrics in this file (own file parsing, own pose, own loops).
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/ColorOcTree.h>
+#include <sstream>
+
+#include "evidential_octomap/class_table.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "test_helpers.h"
+
+namespace fs = std::filesystem;
+using namespace tools_test;
+using evidential_octomap::ClassTable;
+using evidential_octomap::EvidentialOcTree;
+
+namespace {
+
+struct Result {
+  int status;
+  std::string output;  // stdout and stderr
+};
+
+Result run(const std::string& args) {
+  const std::string cmd = std::string(EVIDENTIAL_TEST_CLI) + " " + args + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  std::string out;
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe.get())) > 0) out.append(buf.data(), n);
+  const int status = pclose(pipe.release());
+  return {WEXITSTATUS(status), out};
+}
+
+nlohmann::json readJson(const std::string& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+template <typename T>
+std::vector<T> readRaw(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  in.seekg(0, std::ios::end);
+  std::vector<T> v(size_t(in.tellg()) / sizeof(T));
+  in.seekg(0);
+  in.read(reinterpret_cast<char*>(v.data()), std::streamsize(v.size() * sizeof(T)));
+  return v;
+}
+
+Eigen::Matrix4d parse3x4(const std::string& text) {
+  std::istringstream in(text);
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) in >> T(r, c);
+  return T;
+}
+
+// The metrics of DESIGN §6 recomputed from scratch for scans 000000 and 000001.
+struct Independent {
+  size_t queries = 0, covered = 0, correct = 0;
+  double brier = 0.0;
+  double miou = 0.0;
+};
+
+Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
+  std::ifstream calib(kittiDir() + "/calib.txt"), poses(kittiDir() + "/poses.txt");
+  std::string line;
+  Eigen::Matrix4d Tr;
+  while (std::getline(calib, line))
+    if (line.rfind("Tr:", 0) == 0) Tr = parse3x4(line.substr(3));
+  const int C = classes.numClasses();
+  std::vector<size_t> tp(C, 0), fp(C, 0), fn(C, 0), gt_count(C, 0);
+  Independent r;
+  for (const char* name : {"000000", "000001"}) {
+    std::getline(poses, line);
+    const Eigen::Matrix4d T = Tr.inverse() * parse3x4(line) * Tr;
+    const auto xyzr = readRaw<float>(kittiDir() + "/velodyne/" + name + ".bin");
+    const auto labels = readRaw<uint32_t>(kittiDir() + "/labels/" + name + ".label");
+    for (size_t i = 0; i < labels.size(); ++i) {
+      const int gt = classes.learning_map.at(labels[i] & 0xFFFF);
+      if (gt == classes.ignore_class) continue;
+      const Eigen::Vector3d p =
+          (T * Eigen::Vector4d(xyzr[4 * i], xyzr[4 * i + 1], xyzr[4 * i + 2], 1.0)).head<3>();
+      ++r.queries;
+      ++gt_count[gt];
+      const auto* node = tree.search(float(p.x()), float(p.y()), float(p.z()));
+      if (!node || node->getLogOdds() < 0.0f) continue;  // occupied: log-odds >= 0 (p >= 0.5)
+      ++r.covered;
+      const auto op = tree.opinion(node);
+      const int s = node->hasSemantics() ? op.label : -1;
+      const double u = node->hasSemantics() ? op.uncertainty : 1.0;
+      const double wrong = s == gt ? 0.0 : 1.0;
+      r.brier += (u - wrong) * (u - wrong);
+      if (s == gt) {
+        ++r.correct;
+        ++tp[gt];
+      } else {
+        ++fn[gt];
+        if (s >= 0) ++fp[s];
+      }
+    }
+  }
+  r.brier /= double(r.covered);
+  // mIoU over classes present in GT among covered queries (tp + fn > 0).
+  int n = 0;
+  for (int c = 0; c < C; ++c) {
+    if (c == classes.ignore_class || tp[c] + fn[c] == 0) continue;
+    r.miou += double(tp[c]) / double(tp[c] + fp[c] + fn[c]);
+    ++n;
+  }
+  r.miou /= n;
+  return r;
+}
+
+class CliEndToEnd : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    out_ = freshDir("cli_e2e");
+    map_result_ = run("map --data " + kittiDir() + " --classes " + kittiClasses() +
+                      " --scans 2 --quiet --out " + out_ + "/map");
+  }
+  static std::string out_;
+  static Result map_result_;
+};
+std::string CliEndToEnd::out_;
+Result CliEndToEnd::map_result_;
+
+}  // namespace
+
+TEST_F(CliEndToEnd, MapWritesEveryOutput) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  for (const char* f : {"map.ot", "metrics.json", "metrics.md", "semantic.png", "uncertainty.png",
+                        "error.png"}) {
+    EXPECT_TRUE(fs::exists(out_ + "/map/" + f)) << f;
+    EXPECT_GT(fs::file_size(out_ + "/map/" + f), 100u) << f;
+  }
+}
+
+TEST_F(CliEndToEnd, MetricsJsonIsLabelledAndInRange) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  const auto j = readJson(out_ + "/map/metrics.json");
+  EXPECT_EQ(j["evidence_source"], "onehot");
+  EXPECT_EQ(j["evidence_derived_from_hard_labels"], true);
+  EXPECT_EQ(j["protocol"], "reconstruction");
+  EXPECT_EQ(j["parameters"]["rule"], "dempster");
+  EXPECT_EQ(j["parameters"]["drop_percent"], 10.0);
+  EXPECT_EQ(j["map_scans"].size(), 2u);
+  for (const char* k : {"o_acc", "miou", "acc", "brier"}) {
+    const double v = j["map"][k];
+    EXPECT_GE(v, 0.0) << k;
+    EXPECT_LE(v, 1.0) << k;
+  }
+  EXPECT_GT(double(j["map"]["miou"]), 0.2);
+  const std::string md = map_result_.output;
+  EXPECT_NE(md.find("derived from hard labels"), std::string::npos);
+  EXPECT_NE(md.find("reconstruction"), std::string::npos);
+}
+
+TEST_F(CliEndToEnd, MetricsEqualAnIndependentComputation) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  std::unique_ptr<octomap::AbstractOcTree> any(
+      octomap::AbstractOcTree::read(out_ + "/map/map.ot"));
+  auto* tree = dynamic_cast<EvidentialOcTree*>(any.get());
+  ASSERT_NE(tree, nullptr);
+  const ClassTable classes = ClassTable::load(kittiClasses());
+  const Independent ind = recompute(*tree, classes);
+  const auto j = readJson(out_ + "/map/metrics.json");
+  EXPECT_EQ(size_t(j["map"]["queries"]), ind.queries);
+  EXPECT_EQ(size_t(j["map"]["covered"]), ind.covered);
+  EXPECT_NEAR(double(j["map"]["o_acc"]), double(ind.covered) / ind.queries, 1e-12);
+  EXPECT_NEAR(double(j["map"]["acc"]), double(ind.correct) / ind.covered, 1e-12);
+  EXPECT_NEAR(double(j["map"]["miou"]), ind.miou, 1e-12);
+  EXPECT_NEAR(double(j["map"]["brier"]), ind.brier, 1e-9);
+}
+
+TEST_F(CliEndToEnd, InfoReadsTheMapBack) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  const Result r = run("info " + out_ + "/map/map.ot");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("EvidentialOcTree"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("classes (C):     20"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("dempster"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("traffic-sign"), std::string::npos) << r.output;
+  const auto j = readJson(out_ + "/map/metrics.json");
+  const std::string sem = "semantic nodes:  " + std::to_string(size_t(j["tree"]["semantic_nodes"]));
+  EXPECT_NE(r.output.find(sem), std::string::npos) << r.output;
+}
+
+TEST_F(CliEndToEnd, EvalOfTheSavedMapReproducesTheMetrics) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  const Result r = run("eval --map " + out_ + "/map/map.ot --data " + kittiDir() +
+                       " --classes " + kittiClasses() + " --scans 2 --out " + out_ + "/eval");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto a = readJson(out_ + "/map/metrics.json"), b = readJson(out_ + "/eval/metrics.json");
+  for (const char* k : {"queries", "covered", "o_acc", "miou", "acc", "brier"}) {
+    EXPECT_EQ(a["map"][k], b["map"][k]) << k;
+  }
+  EXPECT_EQ(a["input_predictions"], b["input_predictions"]);
+}
+
+TEST_F(CliEndToEnd, ExportAndMergeWriteReadableMaps) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  const std::string map = out_ + "/map/map.ot";
+  Result r = run("export --map " + map + " --classes " + kittiClasses() + " --color-octree " +
+                 out_ + "/color.ot --mode uncertainty");
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::unique_ptr<octomap::AbstractOcTree> color(octomap::AbstractOcTree::read(out_ + "/color.ot"));
+  ASSERT_NE(dynamic_cast<octomap::ColorOcTree*>(color.get()), nullptr);
+  r = run("merge " + map + " " + map + " -o " + out_ + "/merged.ot");
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = run("info " + out_ + "/merged.ot");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("EvidentialOcTree"), std::string::npos);
+}
+
+TEST(CliErrors, MissingDataDirectoryFails) {
+  const Result r = run("map --data /nonexistent/dir --classes " + kittiClasses());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("/nonexistent/dir"), std::string::npos) << r.output;
+}
+
+TEST(CliErrors, BadLabelFileIsNamed) {
+  const std::string dir = freshDir("cli_bad_labels");
+  fs::create_directories(dir + "/velodyne");
+  fs::create_directories(dir + "/labels");
+  fs::create_directories(dir + "/predictions");
+  writeBinary(dir + "/velodyne/000000.bin", std::vector<float>(40, 1.0f));
+  writeBinary(dir + "/labels/000000.label", std::vector<uint32_t>(10, 40));
+  writeBinary(dir + "/predictions/000000.label", std::vector<uint32_t>(10, 12345));
+  fs::copy_file(kittiDir() + "/calib.txt", dir + "/calib.txt");
+  std::ofstream(dir + "/poses.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";
+  const Result r = run("map --quiet --data " + dir + " --classes " + kittiClasses() + " --out " +
+                       dir + "/out");
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("predictions/000000.label"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("12345"), std::string::npos) << r.output;
+}
+
+TEST(CliErrors, EverySubcommandHasHelp) {
+  for (const char* c : {"map", "eval", "compare", "export", "merge", "info"}) {
+    const Result r = run(std::string(c) + " --help");
+    EXPECT_EQ(r.status, 0) << c;
+    EXPECT_NE(r.output.find("Usage:"), std::string::npos) << c;
+  }
+}

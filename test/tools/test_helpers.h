@@ -1,0 +1,35 @@
+// Shared by the tool tests: paths (CMake-defined) and temporary directories.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace tools_test {
+
+inline std::string dataDir() { return EVIDENTIAL_TEST_DATA_DIR; }
+inline std::string kittiDir() { return dataDir() + "/semantickitti_08_first10"; }
+inline std::string rellisDir() { return dataDir() + "/rellis3d_example_000104"; }
+inline std::string kittiClasses() {
+  return std::string(EVIDENTIAL_TEST_CONFIG_DIR) + "/classes_semantickitti.yaml";
+}
+inline std::string rellisClasses() {
+  return std::string(EVIDENTIAL_TEST_CONFIG_DIR) + "/classes_rellis3d.yaml";
+}
+
+// A fresh directory under the build tree, removed first if it exists.
+inline std::string freshDir(const std::string& name) {
+  const std::filesystem::path p = std::filesystem::path(EVIDENTIAL_TEST_TMP_DIR) / name;
+  std::filesystem::remove_all(p);
+  std::filesystem::create_directories(p);
+  return p.string();
+}
+
+template <typename T>
+void writeBinary(const std::string& path, const std::vector<T>& values) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(values.data()), std::streamsize(values.size() * sizeof(T)));
+}
+
+}  // namespace tools_test

@@ -1,0 +1,208 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "dataset.h"
+#include "test_helpers.h"
+
+namespace fs = std::filesystem;
+using evidential_octomap::ClassTable;
+using evidential_octomap::tools::Dataset;
+using evidential_octomap::tools::readFloatMatrix;
+using namespace tools_test;
+
+namespace {
+// Independent of the reader: the 12 numbers of a line, padded to 4 x 4.
+Eigen::Matrix4d matrixFromNumbers(std::istringstream& in) {
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) in >> T(r, c);
+  return T;
+}
+
+std::string messageOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "(no exception)";
+}
+}  // namespace
+
+TEST(KittiReader, ScanCountsMatchTheFiles) {
+  const ClassTable classes = ClassTable::load(kittiClasses());
+  const Dataset d = Dataset::open(kittiDir(), classes);
+  ASSERT_EQ(d.size(), 10u);
+  EXPECT_EQ(d.layout(), Dataset::Layout::kSemanticKitti);
+  EXPECT_TRUE(d.hasLabels());
+  EXPECT_TRUE(d.hasPredictions());
+  EXPECT_FALSE(d.hasEvidence());
+  for (size_t i : {size_t(0), size_t(9)}) {
+    const auto scan = d.load(i);
+    const size_t expected = fs::file_size(kittiDir() + "/velodyne/" + scan.name + ".bin") / 16;
+    EXPECT_EQ(scan.size() + scan.dropped_no_return, expected);
+    EXPECT_EQ(scan.dropped_no_return, 0u);  // KITTI has no zero points
+    EXPECT_EQ(scan.gt.size(), scan.size());
+    EXPECT_EQ(scan.predicted.size(), scan.size());
+    EXPECT_GT(scan.size(), 120000u);
+    EXPECT_LT(scan.size(), 126000u);
+  }
+  EXPECT_EQ(d.load(0).size(), 123389u);  // 000000.bin is 1,974,224 bytes
+}
+
+TEST(KittiReader, PoseOfScan0IsInvTrTimesPTimesTr) {
+  // Hand computation from the text files, without the reader's parsing code.
+  std::ifstream calib(kittiDir() + "/calib.txt");
+  std::string line;
+  Eigen::Matrix4d Tr = Eigen::Matrix4d::Zero();
+  while (std::getline(calib, line)) {
+    if (line.rfind("Tr:", 0) == 0) {
+      std::istringstream in(line.substr(3));
+      Tr = matrixFromNumbers(in);
+    }
+  }
+  std::ifstream poses(kittiDir() + "/poses.txt");
+  std::getline(poses, line);
+  std::istringstream in0(line);
+  const Eigen::Matrix4d P0 = matrixFromNumbers(in0);
+  const Eigen::Matrix4d expected = Tr.inverse() * P0 * Tr;
+
+  const ClassTable classes = ClassTable::load(kittiClasses());
+  const Dataset d = Dataset::open(kittiDir(), classes);
+  EXPECT_TRUE(d.pose(0).isApprox(expected, 1e-12)) << d.pose(0) << "\nvs\n" << expected;
+  // P0 is (numerically) the identity, so the Velodyne pose of scan 0 is too.
+  EXPECT_LT((d.pose(0) - Eigen::Matrix4d::Identity()).cwiseAbs().maxCoeff(), 1e-6);
+  // About 0.7 m per scan forward, in the Velodyne x direction.
+  const Eigen::Vector3d t1 = d.pose(1).block<3, 1>(0, 3);
+  EXPECT_GT(t1.norm(), 0.5);
+  EXPECT_LT(t1.norm(), 1.0);
+  EXPECT_GT(t1.x(), 0.5);
+}
+
+TEST(RellisReader, SinglePoselessScanDropsNoReturnPoints) {
+  const ClassTable classes = ClassTable::load(rellisClasses());
+  const Dataset d = Dataset::open(rellisDir(), classes);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d.layout(), Dataset::Layout::kSingleScan);
+  EXPECT_TRUE(d.pose(0).isIdentity());
+  const auto scan = d.load(0);
+  EXPECT_EQ(scan.size(), 77708u);              // README: 77 708 valid
+  EXPECT_EQ(scan.dropped_no_return, 53364u);   // README: 53 364 zero points
+  EXPECT_TRUE(scan.predicted.empty());
+  // README label counts (every zero point is void, so the others keep their counts).
+  std::vector<size_t> count(classes.numClasses(), 0);
+  for (int c : scan.gt) ++count[c];
+  EXPECT_EQ(count[1], 18040u);  // grass
+  EXPECT_EQ(count[2], 17872u);  // tree
+  EXPECT_EQ(count[7], 1310u);   // person
+  EXPECT_EQ(count[13], 100u);   // mud
+}
+
+TEST(RellisReader, AcceptsTheBinPathItself) {
+  const ClassTable classes = ClassTable::load(rellisClasses());
+  const Dataset d = Dataset::open(rellisDir() + "/000104.bin", classes);
+  ASSERT_EQ(d.size(), 1u);
+  EXPECT_EQ(d.load(0).size(), 77708u);
+}
+
+// --- error paths ------------------------------------------------------------------------------
+
+class BrokenKitti : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    classes = ClassTable::load(kittiClasses());
+    dir = freshDir("broken_kitti");
+    fs::create_directories(dir + "/velodyne");
+    fs::create_directories(dir + "/labels");
+    writeBinary(dir + "/velodyne/000000.bin", std::vector<float>(4 * 10, 1.0f));
+    fs::copy_file(kittiDir() + "/calib.txt", dir + "/calib.txt");
+    std::ofstream(dir + "/poses.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";
+  }
+  ClassTable classes;
+  std::string dir;
+};
+
+TEST(ReaderErrors, MissingDirectoryNamesThePath) {
+  const ClassTable classes = ClassTable::load(kittiClasses());
+  const std::string msg = messageOf([&] { Dataset::open("/nonexistent/seq", classes); });
+  EXPECT_NE(msg.find("/nonexistent/seq"), std::string::npos) << msg;
+}
+
+TEST_F(BrokenKitti, LabelCountMismatchNamesTheLabelFile) {
+  writeBinary(dir + "/labels/000000.label", std::vector<uint32_t>(9, 40));
+  const Dataset d = Dataset::open(dir, classes);
+  const std::string msg = messageOf([&] { d.load(0); });
+  EXPECT_NE(msg.find("labels/000000.label"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("9 labels"), std::string::npos) << msg;
+}
+
+TEST_F(BrokenKitti, UnknownLabelIdNamesFileAndId) {
+  std::vector<uint32_t> labels(10, 40);
+  labels[3] = 7777;
+  writeBinary(dir + "/labels/000000.label", labels);
+  const Dataset d = Dataset::open(dir, classes);
+  const std::string msg = messageOf([&] { d.load(0); });
+  EXPECT_NE(msg.find("000000.label"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("7777"), std::string::npos) << msg;
+}
+
+TEST_F(BrokenKitti, TruncatedBinNamesTheBinFile) {
+  writeBinary(dir + "/labels/000000.label", std::vector<uint32_t>(10, 40));
+  writeBinary(dir + "/velodyne/000000.bin", std::vector<float>(4 * 10 - 1, 1.0f));
+  const Dataset d = Dataset::open(dir, classes);
+  const std::string msg = messageOf([&] { d.load(0); });
+  EXPECT_NE(msg.find("velodyne/000000.bin"), std::string::npos) << msg;
+}
+
+TEST_F(BrokenKitti, MissingPosesNamesTheFile) {
+  fs::remove(dir + "/poses.txt");
+  const std::string msg = messageOf([&] { Dataset::open(dir, classes); });
+  EXPECT_NE(msg.find("poses.txt"), std::string::npos) << msg;
+}
+
+TEST_F(BrokenKitti, EvidenceFileOfWrongSizeNamesTheFile) {
+  writeBinary(dir + "/labels/000000.label", std::vector<uint32_t>(10, 40));
+  fs::create_directories(dir + "/evidence");
+  writeBinary(dir + "/evidence/000000.bin", std::vector<float>(10 * 19, 1.0f));  // C is 20
+  const Dataset d = Dataset::open(dir, classes);
+  ASSERT_TRUE(d.hasEvidence());
+  const std::string msg = messageOf([&] { d.load(0); });
+  EXPECT_NE(msg.find("evidence/000000.bin"), std::string::npos) << msg;
+}
+
+TEST_F(BrokenKitti, AlphaFilesBecomeEvidence) {
+  writeBinary(dir + "/labels/000000.label", std::vector<uint32_t>(10, 40));
+  fs::create_directories(dir + "/alpha");
+  std::vector<float> alpha(10 * 20, 1.0f);
+  alpha[3 * 20 + 9] = 6.0f;  // point 3: alpha 6 for road -> evidence 5
+  writeBinary(dir + "/alpha/000000.bin", alpha);
+  const auto scan = Dataset::open(dir, classes).load(0);
+  ASSERT_EQ(scan.evidence.size(), 200u);
+  EXPECT_FLOAT_EQ(scan.evidence[3 * 20 + 9], 5.0f);
+  EXPECT_FLOAT_EQ(scan.evidence[0], 0.0f);
+}
+
+TEST(FloatMatrixReader, ReadsNpyVersion1) {
+  const std::string dir = freshDir("npy");
+  std::string header = "{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3), }";
+  while ((10 + header.size() + 1) % 64 != 0) header += ' ';
+  header += '\n';
+  std::ofstream out(dir + "/e.npy", std::ios::binary);
+  out.write("\x93NUMPY\x01\x00", 8);
+  const uint16_t len = uint16_t(header.size());
+  out.put(char(len & 0xFF));
+  out.put(char(len >> 8));
+  out << header;
+  const float v[6] = {0, 1, 2, 3, 4, 5};
+  out.write(reinterpret_cast<const char*>(v), sizeof v);
+  out.close();
+  const auto m = readFloatMatrix(dir + "/e.npy", 2, 3);
+  ASSERT_EQ(m.size(), 6u);
+  EXPECT_FLOAT_EQ(m[5], 5.0f);
+  EXPECT_THROW(readFloatMatrix(dir + "/e.npy", 3, 3), std::runtime_error);
+}
