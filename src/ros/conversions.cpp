@@ -1,0 +1,367 @@
+#include "conversions.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+
+#include "evidential_octomap/subjective_logic.h"
+
+namespace evidential_octomap {
+namespace {
+
+using sensor_msgs::PointField;
+
+size_t typeSize(uint8_t datatype) {
+  switch (datatype) {
+    case PointField::INT8:
+    case PointField::UINT8: return 1;
+    case PointField::INT16:
+    case PointField::UINT16: return 2;
+    case PointField::INT32:
+    case PointField::UINT32:
+    case PointField::FLOAT32: return 4;
+    case PointField::FLOAT64: return 8;
+    default: return 0;
+  }
+}
+
+const char* typeName(uint8_t datatype) {
+  static const char* names[] = {"?", "int8", "uint8", "int16", "uint16",
+                                "int32", "uint32", "float32", "float64"};
+  return datatype <= 8 ? names[datatype] : "?";
+}
+
+// One field as found in the message: where it is and how to read it.
+struct FieldRef {
+  uint32_t offset = 0;
+  uint8_t datatype = 0;
+  size_t size = 0;
+};
+
+// Reads one value of `datatype` at `p` as double, honouring the message's byte order.
+double readValue(const uint8_t* p, uint8_t datatype, bool swap) {
+  uint8_t b[8];
+  const size_t n = typeSize(datatype);
+  if (swap) {
+    for (size_t i = 0; i < n; ++i) b[i] = p[n - 1 - i];
+  } else {
+    std::memcpy(b, p, n);
+  }
+  switch (datatype) {
+    case PointField::INT8: { int8_t v; std::memcpy(&v, b, 1); return v; }
+    case PointField::UINT8: return b[0];
+    case PointField::INT16: { int16_t v; std::memcpy(&v, b, 2); return v; }
+    case PointField::UINT16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
+    case PointField::INT32: { int32_t v; std::memcpy(&v, b, 4); return v; }
+    case PointField::UINT32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
+    case PointField::FLOAT32: { float v; std::memcpy(&v, b, 4); return v; }
+    case PointField::FLOAT64: { double v; std::memcpy(&v, b, 8); return v; }
+    default: return std::nan("");
+  }
+}
+
+const PointField* findField(const sensor_msgs::PointCloud2& msg, const std::string& name) {
+  for (const auto& f : msg.fields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+std::string fieldList(const sensor_msgs::PointCloud2& msg) {
+  std::string s;
+  for (const auto& f : msg.fields) s += (s.empty() ? "" : ", ") + f.name;
+  return s.empty() ? "(none)" : s;
+}
+
+// Checks that `f` lies inside a point; "" or an error naming the field.
+std::string checkField(const PointField& f, uint32_t point_step) {
+  const size_t n = typeSize(f.datatype);
+  if (n == 0) return "field '" + f.name + "' has unknown datatype " + std::to_string(f.datatype);
+  const size_t count = std::max<uint32_t>(f.count, 1);
+  if (size_t(f.offset) + n * count > point_step)
+    return "field '" + f.name + "' (offset " + std::to_string(f.offset) + ", " +
+           std::to_string(count) + " x " + typeName(f.datatype) + ") does not fit point_step " +
+           std::to_string(point_step);
+  return "";
+}
+
+// Finds C float channels either as one field `base` with count C or as `base_0..base_{C-1}`.
+// Returns "" and fills `refs` (C entries), "absent" when neither form exists, else an error.
+std::string findChannels(const sensor_msgs::PointCloud2& msg, const std::string& base, int C,
+                         std::vector<FieldRef>* refs) {
+  refs->clear();
+  auto isFloat = [](uint8_t t) { return t == PointField::FLOAT32 || t == PointField::FLOAT64; };
+  if (const PointField* f = findField(msg, base)) {
+    if (!isFloat(f->datatype))
+      return "field '" + base + "' must be float32 (or float64), is " + typeName(f->datatype);
+    if (int(f->count) != C)
+      return "field '" + base + "' has count " + std::to_string(f->count) + ", expected C = " +
+             std::to_string(C) + " (num_classes)";
+    std::string err = checkField(*f, msg.point_step);
+    if (!err.empty()) return err;
+    const size_t n = typeSize(f->datatype);
+    for (int c = 0; c < C; ++c) refs->push_back({uint32_t(f->offset + c * n), f->datatype, n});
+    return "";
+  }
+  if (!findField(msg, base + "_0")) return "absent";
+  for (int c = 0; c < C; ++c) {
+    const std::string name = base + "_" + std::to_string(c);
+    const PointField* f = findField(msg, name);
+    if (!f)
+      return "field '" + name + "' is missing: per-class fields need " + base + "_0 .. " + base +
+             "_" + std::to_string(C - 1) + " (C = " + std::to_string(C) + ")";
+    if (!isFloat(f->datatype))
+      return "field '" + name + "' must be float32 (or float64), is " + typeName(f->datatype);
+    std::string err = checkField(*f, msg.point_step);
+    if (!err.empty()) return err;
+    refs->push_back({f->offset, f->datatype, typeSize(f->datatype)});
+  }
+  if (findField(msg, base + "_" + std::to_string(C)))
+    return "field '" + base + "_" + std::to_string(C) + "' exists: the cloud has more than C = " +
+           std::to_string(C) + " (num_classes) channels";
+  return "";
+}
+
+}  // namespace
+
+EvidenceInput evidenceInputFromName(const std::string& name) {
+  if (name == "auto") return EvidenceInput::kAuto;
+  if (name == "evidence") return EvidenceInput::kEvidence;
+  if (name == "alpha") return EvidenceInput::kAlpha;
+  if (name == "label") return EvidenceInput::kLabel;
+  if (name == "none") return EvidenceInput::kNone;
+  throw std::invalid_argument("input_type '" + name +
+                              "' is unknown; use auto, evidence, alpha, label or none");
+}
+
+std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudReadOptions& options,
+                            SemanticCloud* out) {
+  const int C = options.num_classes;
+  if (C <= 0) return "num_classes must be positive";
+  out->points_S.clear();
+  out->evidence.clear();
+  out->nonfinite_points = 0;
+  out->source.clear();
+
+  // --- layout -------------------------------------------------------------------------
+  const size_t n_points = size_t(msg.width) * msg.height;
+  if (n_points == 0) return "cloud has zero points";
+  if (msg.point_step == 0) return "point_step is 0";
+  if (size_t(msg.row_step) < size_t(msg.width) * msg.point_step)
+    return "row_step " + std::to_string(msg.row_step) + " < width " + std::to_string(msg.width) +
+           " x point_step " + std::to_string(msg.point_step);
+  const size_t needed = size_t(msg.row_step) * (msg.height - 1) + size_t(msg.width) * msg.point_step;
+  if (msg.data.size() < needed)
+    return "truncated data: " + std::to_string(msg.data.size()) + " bytes for " +
+           std::to_string(msg.width) + " x " + std::to_string(msg.height) + " points need " +
+           std::to_string(needed);
+
+  FieldRef xyz[3];
+  const char* axes[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    const PointField* f = findField(msg, axes[a]);
+    if (!f) return std::string("missing field '") + axes[a] + "' (fields: " + fieldList(msg) + ")";
+    if (f->datatype != PointField::FLOAT32 && f->datatype != PointField::FLOAT64)
+      return std::string("field '") + axes[a] + "' must be float32 or float64, is " +
+             typeName(f->datatype);
+    std::string err = checkField(*f, msg.point_step);
+    if (!err.empty()) return err;
+    xyz[a] = {f->offset, f->datatype, typeSize(f->datatype)};
+  }
+
+  // --- semantic channels ----------------------------------------------------------------
+  EvidenceInput input = options.input;
+  std::vector<FieldRef> channels;
+  FieldRef label_ref;
+  auto tryChannels = [&](const std::string& base, EvidenceInput kind) -> std::string {
+    std::string err = findChannels(msg, base, C, &channels);
+    if (err.empty()) input = kind;
+    return err;
+  };
+  auto tryLabel = [&]() -> std::string {
+    const PointField* f = findField(msg, "label");
+    if (!f) return "absent";
+    std::string err = checkField(*f, msg.point_step);
+    if (!err.empty()) return err;
+    label_ref = {f->offset, f->datatype, typeSize(f->datatype)};
+    input = EvidenceInput::kLabel;
+    return "";
+  };
+  std::string err;
+  switch (options.input) {
+    case EvidenceInput::kAuto:
+      err = tryChannels("evidence", EvidenceInput::kEvidence);
+      if (err == "absent") err = tryChannels("alpha", EvidenceInput::kAlpha);
+      if (err == "absent") err = tryLabel();
+      if (err == "absent")
+        err = "no semantic field: expected 'evidence' (float32, count " + std::to_string(C) +
+              "), 'evidence_0'..'evidence_" + std::to_string(C - 1) + "', 'alpha' or 'label' (fields: " +
+              fieldList(msg) + ")";
+      break;
+    case EvidenceInput::kEvidence:
+      err = tryChannels("evidence", EvidenceInput::kEvidence);
+      if (err == "absent")
+        err = "missing field 'evidence' (float32, count " + std::to_string(C) +
+              ") or 'evidence_0'..'evidence_" + std::to_string(C - 1) + "' (fields: " + fieldList(msg) + ")";
+      break;
+    case EvidenceInput::kAlpha:
+      err = tryChannels("alpha", EvidenceInput::kAlpha);
+      if (err == "absent")
+        err = "missing field 'alpha' (float32, count " + std::to_string(C) + ") or 'alpha_0'.. (fields: " +
+              fieldList(msg) + ")";
+      break;
+    case EvidenceInput::kLabel:
+      err = tryLabel();
+      if (err == "absent") err = "missing field 'label' (fields: " + fieldList(msg) + ")";
+      break;
+    case EvidenceInput::kNone:
+      break;
+  }
+  if (!err.empty()) return err;
+  switch (input) {
+    case EvidenceInput::kEvidence: out->source = "evidence[" + std::to_string(C) + "]"; break;
+    case EvidenceInput::kAlpha: out->source = "alpha[" + std::to_string(C) + "]"; break;
+    case EvidenceInput::kLabel: out->source = "label"; break;
+    default: out->source = "none (occupancy only)"; break;
+  }
+
+  // --- points ---------------------------------------------------------------------------
+  const bool swap = msg.is_bigendian != 0;  // this code assumes a little-endian host
+  out->points_S.reserve(n_points);
+  out->evidence.reserve(n_points * C);
+  std::vector<float> row(C);
+  for (uint32_t v = 0; v < msg.height; ++v) {
+    const uint8_t* row_ptr = msg.data.data() + size_t(v) * msg.row_step;
+    for (uint32_t u = 0; u < msg.width; ++u) {
+      const uint8_t* p = row_ptr + size_t(u) * msg.point_step;
+      const size_t index = size_t(v) * msg.width + u;
+      const double x = readValue(p + xyz[0].offset, xyz[0].datatype, swap);
+      const double y = readValue(p + xyz[1].offset, xyz[1].datatype, swap);
+      const double z = readValue(p + xyz[2].offset, xyz[2].datatype, swap);
+      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
+        ++out->nonfinite_points;
+        continue;
+      }
+      if (input == EvidenceInput::kEvidence || input == EvidenceInput::kAlpha) {
+        for (int c = 0; c < C; ++c) {
+          double value = readValue(p + channels[c].offset, channels[c].datatype, swap);
+          if (input == EvidenceInput::kAlpha) value -= 1.0;
+          if (!std::isfinite(value) || value < 0.0) {
+            std::ostringstream s;
+            s << "point " << index << ": " << (input == EvidenceInput::kAlpha ? "alpha" : "evidence")
+              << " of class " << c << " is "
+              << (input == EvidenceInput::kAlpha ? value + 1.0 : value)
+              << (input == EvidenceInput::kAlpha ? " (alpha must be finite and >= 1)"
+                                                 : " (evidence must be finite and >= 0)");
+            return s.str();
+          }
+          row[c] = static_cast<float>(value);
+        }
+      } else if (input == EvidenceInput::kLabel) {
+        const double value = readValue(p + label_ref.offset, label_ref.datatype, swap);
+        if (!std::isfinite(value) || value != std::floor(value) || value < 0) {
+          std::ostringstream s;
+          s << "point " << index << ": label " << value << " is not a non-negative integer";
+          return s.str();
+        }
+        int label = static_cast<int>(value);
+        if (options.raw_label_table) {
+          try {
+            label = options.raw_label_table->classOfRaw(static_cast<uint32_t>(value));
+          } catch (const std::exception& e) {
+            return "point " + std::to_string(index) + ": " + e.what();
+          }
+        }
+        if (label >= C) {
+          std::ostringstream s;
+          s << "point " << index << ": label " << label << " is outside [0, " << C << ")";
+          return s.str();
+        }
+        evidenceFromLabel(label, C, options.label_magnitude, row.data());
+      } else {
+        std::fill(row.begin(), row.end(), 0.f);
+      }
+      out->points_S.push_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+      out->evidence.insert(out->evidence.end(), row.begin(), row.end());
+    }
+  }
+  if (out->points_S.size() == 0)
+    return "cloud has no finite points (" + std::to_string(out->nonfinite_points) + " NaN/inf)";
+  return "";
+}
+
+std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& box) {
+  std::vector<VoxelView> voxels;
+  auto add = [&](const EvidentialOcTreeNode& node, const octomap::point3d& center, double size,
+                 unsigned depth) {
+    if (!tree.isNodeOccupied(node)) return;
+    VoxelView v;
+    v.center = center;
+    v.size = size;
+    v.depth = depth;
+    if (node.hasSemantics()) {
+      const VoxelOpinion o = tree.opinion(&node);
+      v.label = o.label;
+      v.uncertainty = o.uncertainty;
+    }
+    voxels.push_back(v);
+  };
+  if (tree.getRoot() == nullptr) return voxels;
+  if (box.empty()) {
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it)
+      add(*it, it.getCoordinate(), it.getSize(), it.getDepth());
+  } else {
+    for (auto it = tree.begin_leafs_bbx(box.min, box.max), end = tree.end_leafs_bbx(); it != end;
+         ++it)
+      add(*it, it.getCoordinate(), it.getSize(), it.getDepth());
+  }
+  return voxels;
+}
+
+float packRgb(const ClassTable::Rgb& rgb) {
+  const uint32_t packed = (uint32_t(rgb[0]) << 16) | (uint32_t(rgb[1]) << 8) | uint32_t(rgb[2]);
+  float f;
+  std::memcpy(&f, &packed, sizeof(f));
+  return f;
+}
+
+sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
+                                       const ClassTable& classes, const std::string& frame_id) {
+  sensor_msgs::PointCloud2 msg;
+  msg.header.frame_id = frame_id;
+  const char* names[6] = {"x", "y", "z", "label", "uncertainty", "rgb"};
+  const uint8_t types[6] = {PointField::FLOAT32, PointField::FLOAT32, PointField::FLOAT32,
+                            PointField::INT32,   PointField::FLOAT32, PointField::FLOAT32};
+  for (int i = 0; i < 6; ++i) {
+    PointField f;
+    f.name = names[i];
+    f.offset = 4 * i;
+    f.datatype = types[i];
+    f.count = 1;
+    msg.fields.push_back(f);
+  }
+  msg.point_step = 24;
+  msg.height = 1;
+  msg.width = static_cast<uint32_t>(voxels.size());
+  msg.row_step = msg.point_step * msg.width;
+  msg.is_bigendian = false;
+  msg.is_dense = true;
+  msg.data.resize(size_t(msg.row_step));
+  const ClassTable::Rgb grey{128, 128, 128};
+  uint8_t* p = msg.data.data();
+  for (const VoxelView& v : voxels) {
+    const float xyz[3] = {v.center.x(), v.center.y(), v.center.z()};
+    const int32_t label = v.label;
+    const bool known = v.label >= 0 && v.label < int(classes.colors.size());
+    const float rgb = packRgb(known ? classes.colors[v.label] : grey);
+    std::memcpy(p, xyz, 12);
+    std::memcpy(p + 12, &label, 4);
+    std::memcpy(p + 16, &v.uncertainty, 4);
+    std::memcpy(p + 20, &rgb, 4);
+    p += msg.point_step;
+  }
+  return msg;
+}
+
+}  // namespace evidential_octomap

@@ -1,0 +1,78 @@
+// ROS <-> core conversions (free functions, no node state, testable without a roscore):
+//   PointCloud2 with per-point evidence  ->  octomap::Pointcloud + N x C evidence,
+//   EvidentialOcTree                     ->  voxel list  ->  PointCloud2 (label, uncertainty, rgb).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <octomap/Pointcloud.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include "evidential_octomap/class_table.h"
+#include "evidential_octomap/evidential_octree.h"
+
+namespace evidential_octomap {
+
+// Which per-point field carries the semantics.
+enum class EvidenceInput {
+  kAuto,      // the first present of: evidence, evidence_0.., alpha, label
+  kEvidence,  // `evidence` (float32, count = C) or `evidence_0` .. `evidence_{C-1}`
+  kAlpha,     // `alpha` (float32, count = C) or `alpha_0` ..; e = alpha - 1
+  kLabel,     // `label` (any integer or float type): one-hot evidence of `label_magnitude`
+  kNone,      // no semantics: occupancy only (zero evidence)
+};
+// "auto", "evidence", "alpha", "label", "none"; throws std::invalid_argument otherwise.
+EvidenceInput evidenceInputFromName(const std::string& name);
+
+struct CloudReadOptions {
+  int num_classes = 0;
+  EvidenceInput input = EvidenceInput::kAuto;
+  float label_magnitude = 20.0f;   // evidence of the labelled class for `label` inputs
+  // Labels are raw dataset ids, mapped through this table's learning map (nullptr: class ids).
+  const ClassTable* raw_label_table = nullptr;
+};
+
+// A cloud read from a message: points in the message's frame and their N x C evidence.
+struct SemanticCloud {
+  octomap::Pointcloud points_S;
+  std::vector<float> evidence;   // row-major, points_S.size() x C
+  size_t nonfinite_points = 0;   // dropped for NaN/inf coordinates (organised clouds)
+  std::string source;            // which field was read, e.g. "evidence[20]", "label"
+};
+
+// Reads x, y, z and the evidence by field name and offset, for any point_step, row_step,
+// height and byte order. Returns "" on success, else a message saying what is wrong (missing
+// field, wrong count or type, truncated data, NaN/inf/negative evidence, label out of range);
+// `out` is then unspecified. Points with non-finite coordinates are dropped and counted.
+std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudReadOptions& options,
+                            SemanticCloud* out);
+
+// One occupied leaf as drawn and published.
+struct VoxelView {
+  octomap::point3d center;
+  double size = 0.0;        // edge length [m]
+  unsigned depth = 0;       // tree depth of the leaf
+  int label = -1;           // argmax class, -1: no semantic evidence
+  float uncertainty = 1.0f;
+};
+
+// Axis-aligned box in the map frame; empty (min > max) means "everything".
+struct Box {
+  octomap::point3d min{1.f, 1.f, 1.f};
+  octomap::point3d max{0.f, 0.f, 0.f};
+  bool empty() const { return min.x() > max.x(); }
+};
+
+// Every occupied leaf of `tree` (inside `box` unless the box is empty).
+std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& box = Box());
+
+// Voxel centres as PointCloud2: x, y, z (float32), label (int32), uncertainty (float32),
+// rgb (float32-packed class colour, grey when unlabelled).
+sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
+                                       const ClassTable& classes, const std::string& frame_id);
+
+// Packs a colour as PCL/rviz expect in a float32 `rgb` field.
+float packRgb(const ClassTable::Rgb& rgb);
+
+}  // namespace evidential_octomap

@@ -1,0 +1,19 @@
+// evidential_mapping_node: fuses per-point semantic evidence from cloud_in into an
+// EvidentialOcTree and serves it (see docs/ros.md).
+#include <ros/ros.h>
+
+#include "MappingServer.h"
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "evidential_mapping_node");
+  ros::NodeHandle nh;
+  ros::NodeHandle nh_private("~");
+  try {
+    evidential_octomap::MappingServer server(nh, nh_private);
+    ros::spin();
+  } catch (const std::exception& e) {
+    ROS_FATAL("evidential_mapping_node: %s", e.what());
+    return 1;
+  }
+  return 0;
+}

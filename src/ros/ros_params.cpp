@@ -1,0 +1,75 @@
+#include "ros_params.h"
+
+#include <stdexcept>
+
+#include <ros/package.h>
+
+namespace evidential_octomap {
+
+std::string defaultClassTablePath() {
+  return ros::package::getPath("evidential_octomap") + "/config/classes_semantickitti.yaml";
+}
+
+NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
+  NodeConfig c;
+  nh.param("frame_id", c.frame_id, c.frame_id);
+  nh.param("resolution", c.resolution, c.resolution);
+  nh.param("classes", c.classes, c.classes);
+  if (c.classes.empty()) c.classes = defaultClassTablePath();
+  nh.param("num_classes", c.num_classes, c.num_classes);
+  nh.param("input_type", c.input_type, c.input_type);
+  nh.param("label_evidence", c.label_evidence, c.label_evidence);
+  nh.param("label_is_raw", c.label_is_raw, c.label_is_raw);
+  nh.param("publish_rate", c.publish_rate, c.publish_rate);
+  nh.param("publish_radius", c.publish_radius, c.publish_radius);
+  nh.param("uncertainty_range/automatic", c.uncertainty_range.automatic, c.uncertainty_range.automatic);
+  nh.param("uncertainty_range/min", c.uncertainty_range.min, c.uncertainty_range.min);
+  nh.param("uncertainty_range/max", c.uncertainty_range.max, c.uncertainty_range.max);
+  nh.param("queue_size", c.queue_size, c.queue_size);
+  nh.param("use_camera", c.use_camera, c.use_camera);
+  nh.param("camera/input", c.camera_input, c.camera_input);
+  nh.param("camera/keep_outside_image", c.keep_outside_image, c.keep_outside_image);
+  nh.param("camera/max_age", c.camera_max_age, c.camera_max_age);
+  if (!(c.resolution > 0.0)) throw std::invalid_argument("~resolution must be > 0");
+  if (c.label_evidence < 0.0) throw std::invalid_argument("~label_evidence must be >= 0");
+  if (c.camera_input != "evidence" && c.camera_input != "label")
+    throw std::invalid_argument("~camera/input must be 'evidence' or 'label'");
+  evidenceInputFromName(c.input_type);  // throws with the valid names
+  return c;
+}
+
+void readSemanticConfig(const ros::NodeHandle& nh, SemanticConfig* config) {
+  SemanticConfig& c = *config;
+  nh.param("rule", c.rule, c.rule);
+  nh.param("length_scale", c.length_scale, c.length_scale);
+  nh.param("sigma0", c.sigma0, c.sigma0);
+  nh.param("beta", c.beta, c.beta);
+  nh.param("gamma", c.gamma, c.gamma);
+  nh.param("drop_percent", c.drop_percent, c.drop_percent);
+  nh.param("adaptive_length", c.adaptive_length, c.adaptive_length);
+  nh.param("uncertainty_threshold", c.uncertainty_threshold, c.uncertainty_threshold);
+  nh.param("reference_compat", c.reference_compat, c.reference_compat);
+  nh.param("sbki_prior", c.sbki_prior, c.sbki_prior);
+  nh.param("ds_multiplier", c.ds_multiplier, c.ds_multiplier);
+  nh.param("sensor_model/max_range", c.max_range, c.max_range);
+  nh.param("kernel_creates_leaves", c.kernel_creates_leaves, c.kernel_creates_leaves);
+  nh.param("discretize", c.discretize, c.discretize);
+  nh.param("threads", c.threads, c.threads);
+}
+
+void readOccupancyParams(const ros::NodeHandle& nh, EvidentialOcTree* tree) {
+  double hit = tree->getProbHit(), miss = tree->getProbMiss();
+  double min = tree->getClampingThresMin(), max = tree->getClampingThresMax();
+  nh.param("sensor_model/hit", hit, hit);
+  nh.param("sensor_model/miss", miss, miss);
+  nh.param("sensor_model/min", min, min);
+  nh.param("sensor_model/max", max, max);
+  if (!(hit > 0.5 && hit <= 1.0) || !(miss >= 0.0 && miss < 0.5) || !(min < max))
+    throw std::invalid_argument("sensor_model: need 0.5 < hit <= 1, 0 <= miss < 0.5, min < max");
+  tree->setProbHit(hit);
+  tree->setProbMiss(miss);
+  tree->setClampingThresMin(min);
+  tree->setClampingThresMax(max);
+}
+
+}  // namespace evidential_octomap

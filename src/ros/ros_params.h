@@ -1,0 +1,51 @@
+// Every ~param of the node, read in one place (voxblox ros_params.h). Semantic parameters go
+// into the core's SemanticConfig and occupancy parameters into the tree; a missing parameter
+// keeps the value the struct or OctoMap already has (nh.param(name, cfg.x, cfg.x)), so no core
+// default is restated here. NodeConfig holds what only the node has, with its defaults written
+// once below.
+#pragma once
+
+#include <string>
+
+#include <ros/node_handle.h>
+
+#include "conversions.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/semantic_config.h"
+#include "visualization.h"
+
+namespace evidential_octomap {
+
+struct NodeConfig {
+  std::string frame_id = "map";      // map frame; clouds are transformed into it
+  double resolution = 0.2;           // leaf size [m] (DESIGN §1)
+  std::string classes;               // class-table yaml; "" = the package's SemanticKITTI table
+  int num_classes = 0;               // 0 = from the class table; otherwise must agree with it
+  std::string input_type = "auto";   // auto | evidence | alpha | label | none
+  double label_evidence = 20.0;      // one-hot evidence magnitude for `label` inputs
+  bool label_is_raw = false;         // labels are raw dataset ids (table's learning map)
+  double publish_rate = 1.0;         // max map publishing rate [Hz]; <= 0: after every scan
+  double publish_radius = -1.0;      // > 0: views only within this radius of the sensor [m]
+  UncertaintyRange uncertainty_range;  // uncertainty colour range (fixed 0..1 or automatic)
+  int queue_size = 5;                // tf2 MessageFilter queue
+  // Camera path (off unless use_camera): evidence image + CameraInfo paint the LiDAR cloud.
+  bool use_camera = false;
+  std::string camera_input = "evidence";  // evidence (32FC(C)) | label (mono8/mono16)
+  bool keep_outside_image = false;        // points outside the image: occupancy only, else dropped
+  double camera_max_age = 0.2;            // max |t_cloud - t_image| [s]
+};
+
+// Reads the node's own parameters. Throws std::invalid_argument for values that cannot work.
+NodeConfig readNodeConfig(const ros::NodeHandle& nh);
+
+// Reads the semantic parameters over `config` (names as in SemanticConfig; max range is
+// sensor_model/max_range as in octomap_server).
+void readSemanticConfig(const ros::NodeHandle& nh, SemanticConfig* config);
+
+// Reads sensor_model/{hit,miss,min,max} over the tree's current values and sets them.
+void readOccupancyParams(const ros::NodeHandle& nh, EvidentialOcTree* tree);
+
+// The package's default class table (config/classes_semantickitti.yaml).
+std::string defaultClassTablePath();
+
+}  // namespace evidential_octomap

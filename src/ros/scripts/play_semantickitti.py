@@ -1,0 +1,208 @@
+#!/usr/bin/python3
+"""Streams a SemanticKITTI-layout directory as PointCloud2 with per-point evidence plus TF.
+
+    rosrun evidential_octomap play_semantickitti.py _data:=<dir> _rate:=2 _loop:=false
+    rosrun evidential_octomap play_semantickitti.py _bag:=/tmp/kitti08.bag   # write a bag instead
+
+Directory layout: velodyne/NNNNNN.bin (float32 x y z remission), predictions/NNNNNN.label
+(uint32, lower 16 bits = raw class id) or labels/ when ~labels_dir says so, poses.txt (camera-0
+poses, 12 floats per line), calib.txt (Tr: velodyne -> camera).
+
+Published (REP 105 names):
+  ~cloud   -> remapped to the mapping node's cloud_in; fields x, y, z (float32) and
+              `evidence` (float32, count C) in frame ~sensor_frame (velodyne);
+  /tf      map -> velodyne, T_world_velo(i) = inv(Tr) * P(i) * Tr (semantic-kitti-api);
+  ~evidence_source (std_msgs/String, latched) says how the evidence was made.
+
+The bundled data ships hard argmax predictions only, so the evidence is DERIVED: one-hot with
+magnitude ~evidence_magnitude on the class given by the class table's learning_map. It is not a
+network's evidential output, and every output says so.
+"""
+import os
+import sys
+
+import numpy as np
+import rospy
+import yaml
+from geometry_msgs.msg import TransformStamped
+from sensor_msgs.msg import PointCloud2, PointField
+from std_msgs.msg import Header, String
+from tf2_msgs.msg import TFMessage
+
+
+def load_class_table(path):
+    with open(path) as f:
+        table = yaml.safe_load(f)
+    names = [c["name"] for c in table["classes"]]
+    lut = np.full(1 << 16, -1, dtype=np.int32)
+    for raw, cls in table["learning_map"].items():
+        lut[int(raw)] = int(cls)
+    return names, lut
+
+
+def read_calib_tr(path):
+    with open(path) as f:
+        for line in f:
+            key, _, values = line.partition(":")
+            if key.strip() == "Tr":
+                tr = np.eye(4)
+                tr[:3, :4] = np.array(values.split(), dtype=np.float64).reshape(3, 4)
+                return tr
+    raise RuntimeError("%s has no Tr line" % path)
+
+
+def read_poses(path, tr):
+    """Velodyne poses in the world: inv(Tr) * P(i) * Tr."""
+    tr_inv = np.linalg.inv(tr)
+    poses = []
+    with open(path) as f:
+        for line in f:
+            if not line.strip():
+                continue
+            p = np.eye(4)
+            p[:3, :4] = np.array(line.split(), dtype=np.float64).reshape(3, 4)
+            poses.append(tr_inv @ p @ tr)
+    return poses
+
+
+def quaternion_from_matrix(r):
+    """(x, y, z, w) of a rotation matrix (Shepperd's method)."""
+    t = np.trace(r)
+    if t > 0:
+        s = np.sqrt(t + 1.0) * 2
+        return ((r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s, 0.25 * s)
+    i = int(np.argmax(np.diag(r)))
+    j, k = (i + 1) % 3, (i + 2) % 3
+    s = np.sqrt(1.0 + r[i, i] - r[j, j] - r[k, k]) * 2
+    q = [0.0, 0.0, 0.0]
+    q[i] = 0.25 * s
+    q[j] = (r[j, i] + r[i, j]) / s
+    q[k] = (r[k, i] + r[i, k]) / s
+    w = (r[k, j] - r[j, k]) / s
+    return (q[0], q[1], q[2], w)
+
+
+def make_cloud(xyz, evidence, header):
+    n, c = evidence.shape
+    dtype = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("evidence", "<f4", (c,))])
+    data = np.empty(n, dtype=dtype)
+    data["x"], data["y"], data["z"] = xyz[:, 0], xyz[:, 1], xyz[:, 2]
+    data["evidence"] = evidence
+    msg = PointCloud2()
+    msg.header = header
+    msg.height, msg.width = 1, n
+    msg.fields = [PointField("x", 0, PointField.FLOAT32, 1), PointField("y", 4, PointField.FLOAT32, 1),
+                  PointField("z", 8, PointField.FLOAT32, 1),
+                  PointField("evidence", 12, PointField.FLOAT32, c)]
+    msg.is_bigendian = False
+    msg.point_step = dtype.itemsize
+    msg.row_step = msg.point_step * n
+    msg.is_dense = True
+    msg.data = data.tobytes()
+    return msg
+
+
+def make_tf(pose, stamp, world, sensor):
+    t = TransformStamped()
+    t.header.stamp = stamp
+    t.header.frame_id = world
+    t.child_frame_id = sensor
+    t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = pose[:3, 3]
+    q = quaternion_from_matrix(pose[:3, :3])
+    t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w = q
+    return t
+
+
+def default_path(rel):
+    import rospkg
+    return os.path.join(rospkg.RosPack().get_path("evidential_octomap"), rel)
+
+
+def main():
+    rospy.init_node("play_semantickitti")
+    data = rospy.get_param("~data", "") or default_path("data/semantickitti_08_first10")
+    classes = rospy.get_param("~classes", "") or default_path("config/classes_semantickitti.yaml")
+    labels_dir = rospy.get_param("~labels_dir", "predictions")
+    magnitude = float(rospy.get_param("~evidence_magnitude", 20.0))
+    rate = float(rospy.get_param("~rate", 1.0))
+    loop = bool(rospy.get_param("~loop", False))
+    bag_path = rospy.get_param("~bag", "")
+    world = rospy.get_param("~world_frame", "map")
+    sensor = rospy.get_param("~sensor_frame", "velodyne")
+    first = int(rospy.get_param("~first", 0))
+    count = int(rospy.get_param("~count", -1))
+    start_delay = float(rospy.get_param("~start_delay", 1.0))
+
+    names, lut = load_class_table(classes)
+    num_classes = len(names)
+    tr = read_calib_tr(os.path.join(data, "calib.txt"))
+    poses = read_poses(os.path.join(data, "poses.txt"), tr)
+    scans = sorted(f[:-4] for f in os.listdir(os.path.join(data, "velodyne")) if f.endswith(".bin"))
+    scans = scans[first:] if count < 0 else scans[first:first + count]
+    source = ("derived: one-hot evidence of magnitude %g from the hard predictions in %s/ "
+              "(raw ids -> %d classes via %s); not a network's evidential output"
+              % (magnitude, labels_dir, num_classes, os.path.basename(classes)))
+    rospy.logwarn("play_semantickitti: %d scans from %s; evidence is %s", len(scans), data, source)
+
+    def scan_messages(index, name, stamp):
+        xyzr = np.fromfile(os.path.join(data, "velodyne", name + ".bin"), dtype="<f4").reshape(-1, 4)
+        raw = np.fromfile(os.path.join(data, labels_dir, name + ".label"), dtype="<u4") & 0xFFFF
+        if raw.shape[0] != xyzr.shape[0]:
+            raise RuntimeError("%s: %d points but %d labels" % (name, xyzr.shape[0], raw.shape[0]))
+        cls = lut[raw]
+        if (cls < 0).any():
+            raise RuntimeError("%s: raw label %d is not in the learning map of %s"
+                               % (name, int(raw[cls < 0][0]), classes))
+        evidence = np.zeros((xyzr.shape[0], num_classes), dtype=np.float32)
+        evidence[np.arange(xyzr.shape[0]), cls] = magnitude
+        header = Header(stamp=stamp, frame_id=sensor)
+        return make_cloud(xyzr[:, :3], evidence, header), make_tf(poses[int(name)], stamp, world, sensor)
+
+    if bag_path:
+        import rosbag
+        with rosbag.Bag(bag_path, "w") as bag:
+            t0 = rospy.Time.from_sec(1.0)
+            bag.write("/evidence_source", String(source), t0)
+            for i, name in enumerate(scans):
+                stamp = t0 + rospy.Duration.from_sec(i / max(rate, 1e-3))
+                cloud, tf = scan_messages(i, name, stamp)
+                bag.write("/tf", TFMessage([tf]), stamp)
+                bag.write("/velodyne_points", cloud, stamp)
+                rospy.loginfo("bag: scan %s (%d points)", name, cloud.width)
+        rospy.loginfo("wrote %d scans to %s (topics /velodyne_points, /tf, /evidence_source)",
+                      len(scans), bag_path)
+        return
+
+    cloud_pub = rospy.Publisher("~cloud", PointCloud2, queue_size=2)
+    tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=10)
+    source_pub = rospy.Publisher("~evidence_source", String, queue_size=1, latch=True)
+    source_pub.publish(String(source))
+    rospy.sleep(start_delay)  # let subscribers connect
+    period = rospy.Duration.from_sec(1.0 / rate) if rate > 0 else rospy.Duration(0)
+    while not rospy.is_shutdown():
+        for i, name in enumerate(scans):
+            if rospy.is_shutdown():
+                break
+            stamp = rospy.Time.now()
+            cloud, tf = scan_messages(i, name, stamp)
+            tf_pub.publish(TFMessage([tf]))
+            rospy.sleep(0.05)  # TF first, so the mapping node's MessageFilter has it
+            cloud_pub.publish(cloud)
+            rospy.loginfo("scan %s: %d points", name, cloud.width)
+            if period > rospy.Duration(0):
+                rospy.sleep(period)
+        if not loop:
+            break
+    # Keep TF alive a little for late subscribers, then stop.
+    rospy.loginfo("play_semantickitti: done (%d scans)", len(scans))
+    rospy.spin() if rospy.get_param("~stay", True) else None
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except rospy.ROSInterruptException:
+        pass
+    except Exception as e:  # a clear message, not a traceback, for bad directories
+        print("play_semantickitti: %s" % e, file=sys.stderr)
+        sys.exit(1)

@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Renders the demo in rviz headless and saves a screenshot, so anyone can check what a user sees:
+#   bash src/ros/scripts/rviz_screenshot.sh [out.png]      (default docs/images/rviz_demo.png)
+# Needs a built catkin workspace (WS, default build/catkin_ws) and xvfb, imagemagick.
+# Runs demo.launch under Xvfb with software GL, waits until the map has been published after the
+# last scan, waits WAIT seconds more for rviz to draw, grabs the root window, stops everything.
+set -eo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
+out="${1:-${root}/docs/images/rviz_demo.png}"
+ws="${WS:-${root}/build/catkin_ws}"
+wait_draw="${WAIT:-15}"
+export PATH="/usr/bin:/bin:${PATH}"
+mkdir -p "$(dirname "${out}")"
+set +u
+# shellcheck disable=SC1091
+source "${ws}/devel/setup.bash"
+export LIBGL_ALWAYS_SOFTWARE=1
+display=":$((90 + RANDOM % 9))"
+log="$(mktemp -d)/demo.log"
+
+Xvfb "${display}" -screen 0 1280x800x24 -nolisten tcp &
+xvfb_pid=$!
+cleanup() {
+  [[ -n "${launch_pid:-}" ]] && kill -INT "${launch_pid}" 2>/dev/null && wait "${launch_pid}" 2>/dev/null
+  kill "${xvfb_pid}" 2>/dev/null || true
+}
+trap cleanup EXIT
+sleep 2
+export DISPLAY="${display}"
+ROS_MASTER_URI="http://localhost:$((11400 + RANDOM % 500))" roslaunch --port "${ROS_PORT:-0}" \
+  evidential_octomap demo.launch rviz:=true rate:=1.0 >"${log}" 2>&1 &
+launch_pid=$!
+echo "rviz_screenshot: demo running (log ${log}); waiting for the last scan's map"
+for _ in $(seq 1 240); do
+  grep -q "play_semantickitti: done" "${log}" && grep -q "published views" "${log}" && break
+  if ! kill -0 "${launch_pid}" 2>/dev/null; then echo "demo died, see ${log}" >&2; exit 1; fi
+  sleep 1
+done
+sleep "${wait_draw}"
+import -window root "${out}"
+echo "rviz_screenshot: wrote ${out}"

@@ -1,0 +1,83 @@
+#include "visualization.h"
+
+#include <algorithm>
+
+#include "evidential_octomap/io.h"
+
+namespace evidential_octomap {
+namespace {
+
+std_msgs::ColorRGBA toColor(const ClassTable::Rgb& rgb) {
+  std_msgs::ColorRGBA c;
+  c.r = rgb[0] / 255.f;
+  c.g = rgb[1] / 255.f;
+  c.b = rgb[2] / 255.f;
+  c.a = 1.f;
+  return c;
+}
+
+// One CUBE_LIST per depth 0..tree_depth; colour_of(voxel) picks each cube's colour.
+template <typename ColorOf>
+visualization_msgs::MarkerArray cubesByDepth(const std::vector<VoxelView>& voxels,
+                                             const std::string& ns, const std::string& frame_id,
+                                             unsigned tree_depth, ColorOf colour_of) {
+  visualization_msgs::MarkerArray array;
+  array.markers.resize(tree_depth + 1);
+  for (unsigned d = 0; d <= tree_depth; ++d) {
+    visualization_msgs::Marker& m = array.markers[d];
+    m.header.frame_id = frame_id;
+    m.ns = ns;
+    m.id = static_cast<int>(d);
+    m.type = visualization_msgs::Marker::CUBE_LIST;
+    m.pose.orientation.w = 1.0;
+    m.color.a = 1.f;
+  }
+  for (const VoxelView& v : voxels) {
+    if (v.depth > tree_depth) continue;
+    visualization_msgs::Marker& m = array.markers[v.depth];
+    m.scale.x = m.scale.y = m.scale.z = v.size;
+    geometry_msgs::Point p;
+    p.x = v.center.x();
+    p.y = v.center.y();
+    p.z = v.center.z();
+    m.points.push_back(p);
+    m.colors.push_back(colour_of(v));
+  }
+  for (visualization_msgs::Marker& m : array.markers)
+    m.action = m.points.empty() ? visualization_msgs::Marker::DELETE
+                                : visualization_msgs::Marker::ADD;
+  return array;
+}
+
+}  // namespace
+
+visualization_msgs::MarkerArray semanticMarkers(const std::vector<VoxelView>& voxels,
+                                                const ClassTable& classes,
+                                                const std::string& frame_id, unsigned tree_depth) {
+  const std_msgs::ColorRGBA grey = toColor({128, 128, 128});
+  std::vector<std_msgs::ColorRGBA> palette;
+  for (const auto& rgb : classes.colors) palette.push_back(toColor(rgb));
+  return cubesByDepth(voxels, "semantic", frame_id, tree_depth, [&](const VoxelView& v) {
+    return v.label >= 0 && v.label < int(palette.size()) ? palette[v.label] : grey;
+  });
+}
+
+visualization_msgs::MarkerArray uncertaintyMarkers(const std::vector<VoxelView>& voxels,
+                                                   const UncertaintyRange& range,
+                                                   const std::string& frame_id, unsigned tree_depth) {
+  double lo = range.min, hi = range.max;
+  if (range.automatic && !voxels.empty()) {
+    lo = hi = voxels.front().uncertainty;
+    for (const VoxelView& v : voxels) {
+      lo = std::min<double>(lo, v.uncertainty);
+      hi = std::max<double>(hi, v.uncertainty);
+    }
+  }
+  const double span = hi > lo ? hi - lo : 1.0;
+  return cubesByDepth(voxels, "uncertainty", frame_id, tree_depth, [&](const VoxelView& v) {
+    const double t = std::min(1.0, std::max(0.0, (v.uncertainty - lo) / span));
+    return toColor(uncertaintyColor(t));
+  });
+}
+
+}  // namespace evidential_octomap

@@ -1,0 +1,457 @@
+// rostest: the real evidential_mapping_node on a real roscore. Publishes clouds with evidence and
+// a static TF, then checks the markers, the voxel cloud, every service, and that malformed
+// clouds or missing TF leave the node alive, the map unchanged and a clear log line.
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Empty.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <visualization_msgs/MarkerArray.h>
+
+#include "evidential_octomap/ClearBbx.h"
+#include "evidential_octomap/EvidentialMap.h"
+#include "evidential_octomap/QueryMap.h"
+#include "evidential_octomap/SaveMap.h"
+#include "evidential_octomap/evidential_octree.h"
+
+using sensor_msgs::PointField;
+namespace eo = evidential_octomap;
+
+namespace {
+
+constexpr int kC = 20;        // SemanticKITTI table
+constexpr int kBuilding = 13;  // colour (255, 200, 0)
+constexpr int kRoad = 9;
+const std::string kNode = "/evidential_mapping_node";
+
+// The sensor sits at (1, 0, 0) in map; its clouds are in frame "lidar".
+// Scene (sensor frame): a wall of class `wall_class` at x = 4 (map x = 5), y in [-2, 2],
+// z in [0, 1.5]; a road patch at z = -1.6 in front of it.
+struct Point {
+  float x, y, z;
+  int cls;
+};
+
+std::vector<Point> scene(float wall_x = 4.05f, int wall_class = kBuilding) {
+  std::vector<Point> pts;
+  for (float y = -2.f; y <= 2.f; y += 0.05f)
+    for (float z = 0.f; z <= 1.5f; z += 0.05f) pts.push_back({wall_x, y, z, wall_class});
+  for (float x = 1.f; x <= 2.f; x += 0.05f)
+    for (float y = -1.f; y <= 1.f; y += 0.05f) pts.push_back({x, y, -1.6f, kRoad});
+  return pts;
+}
+
+// x, y, z, evidence[C]; one-hot evidence of 30 on each point's class.
+sensor_msgs::PointCloud2 cloudOf(const std::vector<Point>& pts, const std::string& frame = "lidar",
+                                 int count = kC) {
+  sensor_msgs::PointCloud2 msg;
+  msg.header.frame_id = frame;
+  msg.header.stamp = ros::Time::now();
+  const char* axes[3] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) {
+    PointField f;
+    f.name = axes[i];
+    f.offset = 4 * i;
+    f.datatype = PointField::FLOAT32;
+    f.count = 1;
+    msg.fields.push_back(f);
+  }
+  PointField e;
+  e.name = "evidence";
+  e.offset = 12;
+  e.datatype = PointField::FLOAT32;
+  e.count = count;
+  msg.fields.push_back(e);
+  msg.point_step = 12 + 4 * count;
+  msg.height = 1;
+  msg.width = pts.size();
+  msg.row_step = msg.point_step * msg.width;
+  msg.is_dense = true;
+  msg.data.assign(msg.row_step, 0);
+  for (size_t i = 0; i < pts.size(); ++i) {
+    uint8_t* p = msg.data.data() + i * msg.point_step;
+    const float xyz[3] = {pts[i].x, pts[i].y, pts[i].z};
+    std::memcpy(p, xyz, 12);
+    if (pts[i].cls < count) {
+      const float ev = 30.f;
+      std::memcpy(p + 12 + 4 * pts[i].cls, &ev, 4);
+    }
+  }
+  return msg;
+}
+
+void setEvidence(sensor_msgs::PointCloud2* msg, size_t point, int cls, float value) {
+  std::memcpy(msg->data.data() + point * msg->point_step + 12 + 4 * cls, &value, 4);
+}
+
+geometry_msgs::Point gp(double x, double y, double z) {
+  geometry_msgs::Point p;
+  p.x = x;
+  p.y = y;
+  p.z = z;
+  return p;
+}
+
+class MappingNodeTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("cloud_in", 5);
+    semantic_sub_ = nh_.subscribe("occupied_cells_vis_array", 1, &MappingNodeTest::onSemantic, this);
+    uncertainty_sub_ =
+        nh_.subscribe("uncertainty_cells_vis_array", 1, &MappingNodeTest::onUncertainty, this);
+    cloud_sub_ = nh_.subscribe("semantic_cloud", 1, &MappingNodeTest::onCloud, this);
+    rosout_sub_ = nh_.subscribe("/rosout", 100, &MappingNodeTest::onLog, this);
+    geometry_msgs::TransformStamped t;
+    t.header.stamp = ros::Time(0);
+    t.header.frame_id = "map";
+    t.child_frame_id = "lidar";
+    t.transform.translation.x = 1.0;
+    t.transform.rotation.w = 1.0;
+    tf_.sendTransform(t);
+    ASSERT_TRUE(ros::service::waitForService(kNode + "/query", ros::Duration(60)));
+    ASSERT_TRUE(waitFor([&] { return cloud_pub_.getNumSubscribers() > 0; }));
+    callReset();
+  }
+
+  void onSemantic(const visualization_msgs::MarkerArrayConstPtr& m) { semantic_ = m; }
+  void onUncertainty(const visualization_msgs::MarkerArrayConstPtr& m) { uncertainty_ = m; }
+  void onCloud(const sensor_msgs::PointCloud2ConstPtr& m) { cloud_ = m; }
+  void onLog(const rosgraph_msgs::LogConstPtr& m) {
+    if (m->name == kNode) logs_.push_back(m->msg);
+  }
+
+  // Spins until `done` holds; false after 60 s (a hang guard, not a timing assertion).
+  bool waitFor(const std::function<bool()>& done) {
+    const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(60.0);
+    while (ros::ok() && ros::WallTime::now() < give_up) {
+      ros::spinOnce();
+      if (done()) return true;
+      ros::WallDuration(0.02).sleep();
+    }
+    return false;
+  }
+
+  bool logSays(const std::string& text) {
+    for (const auto& line : logs_)
+      if (line.find(text) != std::string::npos) return true;
+    return false;
+  }
+
+  void callReset() {
+    std_srvs::Empty srv;
+    ASSERT_TRUE(ros::service::call(kNode + "/reset", srv));
+  }
+
+  // Publishes `cloud` and waits for the views it causes (the node publishes after every scan).
+  void insert(const sensor_msgs::PointCloud2& cloud) {
+    semantic_.reset();
+    cloud_.reset();
+    uncertainty_.reset();
+    cloud_pub_.publish(cloud);
+    // Views of an empty map (sent after reset) may still be on their way: wait for a full one.
+    auto cubes = [](const visualization_msgs::MarkerArrayConstPtr& a) {
+      size_t n = 0;
+      if (a)
+        for (const auto& m : a->markers) n += m.points.size();
+      return n;
+    };
+    ASSERT_TRUE(waitFor([&] {
+      return cubes(semantic_) > 0 && cubes(uncertainty_) > 0 && cloud_ && cloud_->width > 0;
+    }));
+  }
+
+  eo::QueryMap::Response query(const std::vector<geometry_msgs::Point>& points) {
+    eo::QueryMap srv;
+    srv.request.points = points;
+    EXPECT_TRUE(ros::service::call(kNode + "/query", srv));
+    return srv.response;
+  }
+
+  // Label, occupancy and uncertainty on a grid covering the scene and the bad clouds' region.
+  std::vector<float> snapshot() {
+    std::vector<geometry_msgs::Point> pts;
+    for (double x = 0.0; x <= 10.0; x += 0.2)
+      for (double y = -2.5; y <= 2.5; y += 0.2)
+        for (double z = -1.8; z <= 1.6; z += 0.2) pts.push_back(gp(x, y, z));
+    const auto r = query(pts);
+    std::vector<float> s;
+    for (size_t i = 0; i < r.labels.size(); ++i) {
+      s.push_back(r.labels[i]);
+      s.push_back(r.occupancy[i]);
+      s.push_back(r.uncertainties[i]);
+    }
+    return s;
+  }
+
+  ros::NodeHandle nh_;
+  ros::Publisher cloud_pub_;
+  ros::Subscriber semantic_sub_, uncertainty_sub_, cloud_sub_, rosout_sub_;
+  tf2_ros::StaticTransformBroadcaster tf_;
+  visualization_msgs::MarkerArrayConstPtr semantic_, uncertainty_;
+  sensor_msgs::PointCloud2ConstPtr cloud_;
+  std::vector<std::string> logs_;
+};
+
+// Fields of the node's semantic_cloud as (x, y, z, label, u) rows.
+struct VoxelRow {
+  float x, y, z;
+  int label;
+  float u;
+};
+std::vector<VoxelRow> rowsOf(const sensor_msgs::PointCloud2& msg) {
+  std::map<std::string, uint32_t> off;
+  for (const auto& f : msg.fields) off[f.name] = f.offset;
+  std::vector<VoxelRow> rows(msg.width * msg.height);
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const uint8_t* p = msg.data.data() + i * msg.point_step;
+    std::memcpy(&rows[i].x, p + off["x"], 4);
+    std::memcpy(&rows[i].y, p + off["y"], 4);
+    std::memcpy(&rows[i].z, p + off["z"], 4);
+    std::memcpy(&rows[i].label, p + off["label"], 4);
+    std::memcpy(&rows[i].u, p + off["uncertainty"], 4);
+  }
+  return rows;
+}
+
+bool onWall(float x, float y, float z) {
+  return std::abs(x - 5.05f) < 0.25f && std::abs(y) < 1.8f && z > 0.2f && z < 1.3f;
+}
+
+}  // namespace
+
+TEST_F(MappingNodeTest, SemanticMarkersShowTheWallInBuildingColour) {
+  insert(cloudOf(scene()));
+  size_t wall_cubes = 0, building_coloured = 0, total = 0;
+  for (const auto& m : semantic_->markers) {
+    EXPECT_EQ(m.header.frame_id, "map");
+    total += m.points.size();
+    for (size_t i = 0; i < m.points.size(); ++i) {
+      if (!onWall(m.points[i].x, m.points[i].y, m.points[i].z)) continue;
+      ++wall_cubes;
+      const auto& c = m.colors[i];
+      if (std::abs(c.r - 1.f) < 1e-3 && std::abs(c.g - 200.f / 255.f) < 1e-3 && c.b < 1e-3)
+        ++building_coloured;
+    }
+  }
+  EXPECT_GT(total, 0u);
+  ASSERT_GT(wall_cubes, 50u);
+  EXPECT_EQ(building_coloured, wall_cubes);
+  // The uncertainty view draws the same cubes.
+  size_t total_u = 0;
+  for (const auto& m : uncertainty_->markers) total_u += m.points.size();
+  EXPECT_EQ(total_u, total);
+}
+
+TEST_F(MappingNodeTest, SemanticCloudCarriesClassAndFusedUncertainty) {
+  const std::vector<Point> pts = scene();
+  insert(cloudOf(pts));
+  // The same scan through the core library directly, with the same (default) parameters.
+  eo::EvidentialOcTree reference(0.2, kC);
+  octomap::Pointcloud points_S;
+  std::vector<float> evidence;
+  for (const auto& p : pts) {
+    points_S.push_back(p.x, p.y, p.z);
+    for (int c = 0; c < kC; ++c) evidence.push_back(c == p.cls ? 30.f : 0.f);
+  }
+  reference.insertSemanticScan(points_S, evidence, octomap::pose6d(1, 0, 0, 0, 0, 0));
+
+  const auto rows = rowsOf(*cloud_);
+  size_t wall = 0, road = 0;
+  for (const auto& r : rows) {
+    const eo::VoxelOpinion expected = reference.query(octomap::point3d(r.x, r.y, r.z));
+    EXPECT_EQ(r.label, expected.label);
+    EXPECT_FLOAT_EQ(r.u, expected.uncertainty);
+    if (onWall(r.x, r.y, r.z)) {
+      ++wall;
+      EXPECT_EQ(r.label, kBuilding);
+      EXPECT_GT(r.u, 0.f);
+      EXPECT_LT(r.u, 1.f);
+    }
+    if (std::abs(r.z + 1.5f) < 0.15f && r.x > 2.2f && r.x < 2.8f && std::abs(r.y) < 0.8f) {
+      ++road;
+      EXPECT_EQ(r.label, kRoad);
+    }
+  }
+  EXPECT_GT(wall, 50u);
+  EXPECT_GT(road, 10u);
+}
+
+TEST_F(MappingNodeTest, QueryReturnsClassBeliefsAndUnknown) {
+  insert(cloudOf(scene()));
+  const auto r = query({gp(5.05, 0.0, 0.75), gp(50, 50, 50)});
+  ASSERT_EQ(r.labels.size(), 2u);
+  ASSERT_EQ(r.num_classes, kC);
+  ASSERT_EQ(r.beliefs.size(), 2u * kC);
+  EXPECT_EQ(r.labels[0], kBuilding);
+  EXPECT_GT(r.occupancy[0], 0.5f);
+  float sum = r.uncertainties[0];
+  for (int c = 0; c < kC; ++c) {
+    sum += r.beliefs[c];
+    if (c != kBuilding) EXPECT_LT(r.beliefs[c], r.beliefs[kBuilding]);
+  }
+  EXPECT_NEAR(sum, 1.f, 1e-4);  // beliefs + u = 1 (Dempster rule)
+  EXPECT_EQ(r.labels[1], -1);
+  EXPECT_FLOAT_EQ(r.occupancy[1], -1.f);
+  EXPECT_FLOAT_EQ(r.uncertainties[1], 1.f);
+}
+
+TEST_F(MappingNodeTest, SaveMapWritesAnOtThatReadsBackAsEvidentialOcTree) {
+  insert(cloudOf(scene()));
+  const std::string path = "/tmp/evidential_octomap_rostest_" + std::to_string(getpid()) + ".ot";
+  eo::SaveMap srv;
+  srv.request.path = path;
+  ASSERT_TRUE(ros::service::call(kNode + "/save_map", srv));
+  ASSERT_TRUE(srv.response.success) << srv.response.message;
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(path));
+  ASSERT_NE(read, nullptr);
+  auto* tree = dynamic_cast<eo::EvidentialOcTree*>(read.get());
+  ASSERT_NE(tree, nullptr) << read->getTreeType();
+  EXPECT_EQ(tree->numClasses(), kC);
+  EXPECT_EQ(tree->classNames()[kBuilding], "building");
+  EXPECT_EQ(tree->query(octomap::point3d(5.05f, 0.f, 0.75f)).label, kBuilding);
+  EXPECT_GT(tree->numSemanticNodes(), 0u);
+  std::remove(path.c_str());
+
+  eo::SaveMap bad;
+  bad.request.path = "/nonexistent_dir/x.ot";
+  ASSERT_TRUE(ros::service::call(kNode + "/save_map", bad));
+  EXPECT_FALSE(bad.response.success);
+  EXPECT_NE(bad.response.message.find("/nonexistent_dir/x.ot"), std::string::npos)
+      << bad.response.message;
+}
+
+TEST_F(MappingNodeTest, EvidentialMapMessageHoldsTheSerialisedTree) {
+  eo::EvidentialMapConstPtr map;
+  ros::Subscriber sub = nh_.subscribe<eo::EvidentialMap>(
+      "evidential_map", 1, [&](const eo::EvidentialMapConstPtr& m) { map = m; });
+  insert(cloudOf(scene()));
+  ASSERT_TRUE(waitFor([&] { return map && map->data.size() > 100; }));
+  EXPECT_EQ(map->num_classes, kC);
+  EXPECT_EQ(map->fusion_rule, "dempster");
+  std::stringstream s(std::string(map->data.begin(), map->data.end()));
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(s));
+  auto* tree = dynamic_cast<eo::EvidentialOcTree*>(read.get());
+  ASSERT_NE(tree, nullptr);
+  EXPECT_EQ(tree->query(octomap::point3d(5.05f, 0.f, 0.75f)).label, kBuilding);
+}
+
+TEST_F(MappingNodeTest, ResetEmptiesTheMap) {
+  insert(cloudOf(scene()));
+  ASSERT_EQ(query({gp(5.05, 0.0, 0.75)}).labels[0], kBuilding);
+  semantic_.reset();
+  callReset();
+  ASSERT_TRUE(waitFor([&] { return bool(semantic_); }));
+  size_t cubes = 0;
+  for (const auto& m : semantic_->markers) cubes += m.points.size();
+  EXPECT_EQ(cubes, 0u);
+  const auto r = query({gp(5.05, 0.0, 0.75), gp(2.5, 0.0, -1.5)});
+  EXPECT_EQ(r.labels[0], -1);
+  EXPECT_FLOAT_EQ(r.occupancy[0], -1.f);
+  EXPECT_FLOAT_EQ(r.occupancy[1], -1.f);
+}
+
+TEST_F(MappingNodeTest, ClearBbxClearsOnlyInside) {
+  insert(cloudOf(scene()));
+  eo::ClearBbx srv;
+  srv.request.min = gp(4.0, 0.5, -0.5);
+  srv.request.max = gp(6.0, 3.0, 2.0);
+  ASSERT_TRUE(ros::service::call(kNode + "/clear_bbx", srv));
+  EXPECT_GT(srv.response.voxels_cleared, 0u);
+  const auto r = query({gp(5.05, 1.0, 0.75), gp(5.05, 1.5, 0.3), gp(5.05, -1.0, 0.75),
+                        gp(5.05, 0.3, 0.75), gp(2.5, 0.0, -1.5)});
+  for (int i = 0; i < 2; ++i) {  // inside: free, no semantics
+    EXPECT_EQ(r.labels[i], -1);
+    EXPECT_GE(r.occupancy[i], 0.f);
+    EXPECT_LT(r.occupancy[i], 0.5f);
+  }
+  EXPECT_EQ(r.labels[2], kBuilding);      // outside: kept
+  EXPECT_EQ(r.labels[3], kBuilding);      // just outside the box edge (y < 0.5)
+  EXPECT_EQ(r.labels[4], kRoad);
+}
+
+// --- robustness ----------------------------------------------------------------------------
+
+class RobustnessTest : public MappingNodeTest {
+ protected:
+  // A good map, then `bad` (whose points lie where the map is unknown): node alive, map
+  // unchanged, and the node's log names the problem.
+  void expectRejected(const sensor_msgs::PointCloud2& bad, const std::string& log_text,
+                      int repeats = 1) {
+    insert(cloudOf(scene()));
+    const auto before = snapshot();
+    for (int i = 0; i < repeats; ++i) {
+      auto msg = bad;
+      msg.header.stamp = ros::Time::now();
+      cloud_pub_.publish(msg);
+      ros::WallDuration(0.05).sleep();
+    }
+    EXPECT_TRUE(waitFor([&] { return logSays(log_text); })) << "no log line with: " << log_text;
+    const auto after = snapshot();  // the node answers: it is alive
+    EXPECT_EQ(before, after) << "the bad cloud changed the map";
+    EXPECT_EQ(query({gp(9.05, 0.0, 0.75)}).occupancy[0], -1.f);
+  }
+  // Bad clouds put a wall at map x = 9 where the good scene has nothing.
+  std::vector<Point> farWall() { return scene(8.05f, 15); }
+};
+
+TEST_F(RobustnessTest, MissingEvidenceFieldIsRejected) {
+  auto msg = cloudOf(farWall());
+  msg.fields[3].name = "intensity";
+  expectRejected(msg, "no semantic field");
+}
+
+TEST_F(RobustnessTest, WrongEvidenceCountIsRejected) {
+  expectRejected(cloudOf(farWall(), "lidar", kC - 1), "has count 19, expected C = 20");
+}
+
+TEST_F(RobustnessTest, NanEvidenceIsRejected) {
+  auto msg = cloudOf(farWall());
+  setEvidence(&msg, 7, 3, std::nanf(""));
+  expectRejected(msg, "point 7: evidence of class 3 is nan");
+}
+
+TEST_F(RobustnessTest, InfiniteEvidenceIsRejected) {
+  auto msg = cloudOf(farWall());
+  setEvidence(&msg, 8, 2, INFINITY);
+  expectRejected(msg, "point 8: evidence of class 2 is inf");
+}
+
+TEST_F(RobustnessTest, NegativeEvidenceIsRejected) {
+  auto msg = cloudOf(farWall());
+  setEvidence(&msg, 9, 1, -2.f);
+  expectRejected(msg, "point 9: evidence of class 1 is -2");
+}
+
+TEST_F(RobustnessTest, TruncatedDataIsRejected) {
+  auto msg = cloudOf(farWall());
+  msg.data.resize(msg.data.size() / 2);
+  expectRejected(msg, "truncated data");
+}
+
+TEST_F(RobustnessTest, ZeroPointsIsRejected) {
+  expectRejected(cloudOf({}), "cloud has zero points");
+}
+
+TEST_F(RobustnessTest, MissingTfDropsTheCloud) {
+  // No transform map <- nowhere ever arrives: the MessageFilter drops the oldest cloud once
+  // its queue is full, and the node says so.
+  expectRejected(cloudOf(farWall(), "nowhere"), "no transform nowhere -> map", 8);
+}
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "test_mapping_node");
+  ros::NodeHandle nh;
+  return RUN_ALL_TESTS();
+}
