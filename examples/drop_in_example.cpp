@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
             << wall.uncertainty << " (" << stats.voxels_updated << " voxels updated)\n";
   // ... and the whole OctoMap API still works.
   octomap::point3d hit;
-  const bool found = tree.castRay(origin_W, octomap::point3d(2.0f, 0.0f, -1.5f), hit);
+  const bool found = tree.castRay(origin_W, octomap::point3d(2.0f, 0.0f, -1.5f), hit,
+                                  /*ignoreUnknownCells=*/true);
   std::cout << "ray hit: " << found << " at " << hit << "\n";
 
   // .ot files come back as our tree through OctoMap's generic reader.

@@ -1,0 +1,594 @@
+// Files: .ot round trips (AbstractOcTree::read, saveMap/loadMap), .bt in plain OcTree,
+// ColorOcTree export, exact merge, corrupt/truncated/foreign files and atomic saves.
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <random>
+#include <set>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/ColorOcTree.h>
+#include <octomap/octomap.h>
+
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/io.h"
+#include "synthetic_scene.h"
+#include "tree_compare.h"
+
+namespace evidential_octomap {
+namespace {
+
+namespace fs = std::filesystem;
+using test::compareTrees;
+using test::SyntheticScene;
+
+using KeyTuple = std::tuple<int, int, int>;
+KeyTuple tupleOf(const octomap::OcTreeKey& k) { return {k[0], k[1], k[2]}; }
+
+// A fresh directory per test, removed afterwards.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "evidential_ot_XXXXXX").string();
+    path_ = ::mkdtemp(pattern.data());
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string file(const std::string& name) const { return (fs::path(path_) / name).string(); }
+  std::set<std::string> entries() const {
+    std::set<std::string> out;
+    for (const auto& e : fs::directory_iterator(path_)) out.insert(e.path().filename().string());
+    return out;
+  }
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void writeBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// A map with non-default settings everywhere the file has to carry them.
+std::unique_ptr<EvidentialOcTree> makeMap(const std::string& rule, int scans = 2, unsigned seed = 10,
+                                          float shift = 0.0f) {
+  SyntheticScene scene;
+  SemanticConfig config;
+  config.rule = rule;
+  config.length_scale = 0.25;
+  config.drop_percent = 15.0;
+  config.max_range = 30.0;
+  config.sbki_prior = 0.002f;
+  config.kernel_creates_leaves = true;
+  auto tree = std::make_unique<EvidentialOcTree>(0.2, scene.num_classes, config);
+  tree->setClassNames({"ground", "box", "other"});
+  tree->setProbHit(0.75);
+  tree->setClampingThresMax(0.95);
+  for (int i = 0; i < scans; ++i) {
+    const auto scan = scene.scan(octomap::point3d(0.05f + shift + 0.4f * i, 0.1f, 1.7f), seed + i);
+    tree->insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  }
+  return tree;
+}
+
+std::unique_ptr<EvidentialOcTree> smallMap() {
+  auto tree = std::make_unique<EvidentialOcTree>(0.2, 2);
+  octomap::Pointcloud points;
+  points.push_back(1.1f, 0.1f, 0.1f);
+  points.push_back(1.1f, 0.3f, 0.1f);
+  tree->insertSemanticScan(points, {4.0f, 0.5f, 0.5f, 3.0f}, octomap::point3d(0.1f, 0.1f, 0.1f));
+  return tree;
+}
+
+// --- round trips ----------------------------------------------------------------------------------
+
+TEST(OtFile, RoundTripThroughAbstractOcTreeReadIsBitExact) {
+  TempDir dir;
+  for (const std::string& rule : kFusionRuleNames) {
+    const auto tree = makeMap(rule);
+    ASSERT_GT(tree->numSemanticNodes(), 0u);
+    const std::string path = dir.file(rule + ".ot");
+    ASSERT_TRUE(tree->write(path));
+    std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
+    ASSERT_NE(any, nullptr) << rule;
+    EXPECT_EQ(any->getTreeType(), "EvidentialOcTree");
+    auto* read_back = dynamic_cast<EvidentialOcTree*>(any.get());
+    ASSERT_NE(read_back, nullptr) << rule;
+    EXPECT_TRUE(read_back->readError().empty()) << read_back->readError();
+    EXPECT_TRUE(compareTrees(*tree, *read_back)) << rule;
+  }
+}
+
+TEST(OtFile, StreamRoundTripIsBitExact) {
+  const auto tree = makeMap("dempster");
+  std::stringstream s;
+  ASSERT_TRUE(tree->write(s));
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(s));
+  auto* read_back = dynamic_cast<EvidentialOcTree*>(any.get());
+  ASSERT_NE(read_back, nullptr);
+  EXPECT_TRUE(compareTrees(*tree, *read_back));
+}
+
+TEST(OtFile, SaveMapLoadMapRoundTripIsBitExact) {
+  TempDir dir;
+  for (const std::string& rule : kFusionRuleNames) {
+    const auto tree = makeMap(rule);
+    const std::string path = dir.file("map_" + rule + ".ot");
+    saveMap(*tree, path);
+    const auto loaded = loadMap(path);
+    ASSERT_NE(loaded, nullptr);
+    EXPECT_TRUE(compareTrees(*tree, *loaded)) << rule;
+    // Saving the loaded map again gives the same bytes.
+    const std::string again = dir.file("again_" + rule + ".ot");
+    saveMap(*loaded, again);
+    EXPECT_EQ(readBytes(path), readBytes(again)) << rule;
+  }
+}
+
+TEST(OtFile, EmptyAndSingleClassMapsRoundTrip) {
+  TempDir dir;
+  EvidentialOcTree empty(0.1, 5);
+  saveMap(empty, dir.file("empty.ot"));
+  const auto loaded = loadMap(dir.file("empty.ot"));
+  EXPECT_TRUE(compareTrees(empty, *loaded));
+  EXPECT_EQ(loaded->numClasses(), 5);
+
+  EvidentialOcTree one(0.5, 1);
+  octomap::Pointcloud points;
+  points.push_back(2.25f, 0.25f, 0.25f);
+  one.insertSemanticScan(points, {7.0f}, octomap::point3d(0.25f, 0.25f, 0.25f));
+  saveMap(one, dir.file("one.ot"));
+  EXPECT_TRUE(compareTrees(one, *loadMap(dir.file("one.ot"))));
+}
+
+TEST(OtFile, InsertingAfterLoadContinuesLikeTheOriginal) {
+  TempDir dir;
+  const auto tree = makeMap("dempster", 1);
+  saveMap(*tree, dir.file("m.ot"));
+  const auto loaded = loadMap(dir.file("m.ot"));
+  SyntheticScene scene;
+  const auto scan = scene.scan(octomap::point3d(1.05f, 0.1f, 1.7f), 77);
+  tree->insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  loaded->insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  EXPECT_TRUE(compareTrees(*tree, *loaded));
+}
+
+std::set<KeyTuple> occupiedLeafKeys(octomap::OcTree& tree) {
+  tree.expand();
+  std::set<KeyTuple> out;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    if (tree.isNodeOccupied(*it)) out.insert(tupleOf(it.getKey()));
+  }
+  return out;
+}
+
+std::set<KeyTuple> occupiedLeafKeys(EvidentialOcTree& tree) {
+  tree.expand();
+  std::set<KeyTuple> out;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    if (tree.isNodeOccupied(*it)) out.insert(tupleOf(it.getKey()));
+  }
+  return out;
+}
+
+TEST(BtFile, LoadsInPlainOcTreeWithTheSameOccupiedLeaves) {
+  TempDir dir;
+  auto tree = makeMap("dempster");
+  const std::string path = dir.file("map.bt");
+  saveBinaryOccupancy(*tree, path);
+  octomap::OcTree plain(0.1);
+  ASSERT_TRUE(plain.readBinary(path));
+  EXPECT_DOUBLE_EQ(plain.getResolution(), tree->getResolution());
+  const auto expected = occupiedLeafKeys(*tree);
+  ASSERT_GT(expected.size(), 100u);
+  EXPECT_TRUE(occupiedLeafKeys(plain) == expected);
+}
+
+TEST(BtFile, LoadMapRefusesABtFileNamingThePath) {
+  TempDir dir;
+  const std::string path = dir.file("map.bt");
+  saveBinaryOccupancy(*makeMap("dempster", 1), path);
+  try {
+    loadMap(path);
+    FAIL() << "a .bt file was loaded as an EvidentialOcTree";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
+// --- ColorOcTree export ----------------------------------------------------------------------------
+
+ClassTable threeClasses() {
+  ClassTable table;
+  table.dataset = "synthetic";
+  table.names = {"ground", "box", "other"};
+  table.colors = {{200, 10, 10}, {10, 200, 10}, {10, 10, 200}};
+  return table;
+}
+
+TEST(ColorExport, ClassColoursSurviveAbstractOcTreeRead) {
+  TempDir dir;
+  const auto tree = makeMap("dempster");
+  const ClassTable table = threeClasses();
+  const auto color = toColorOcTree(*tree, table, ColorMode::kClass);
+  ASSERT_NE(color, nullptr);
+  const std::string path = dir.file("color.ot");
+  ASSERT_TRUE(color->write(path));
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
+  auto* read_back = dynamic_cast<octomap::ColorOcTree*>(any.get());
+  ASSERT_NE(read_back, nullptr);
+  EXPECT_EQ(read_back->getTreeType(), "ColorOcTree");
+  size_t checked = 0, grey = 0;
+  for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
+    const octomap::ColorOcTreeNode* node = read_back->search(it.getKey(), it.getDepth());
+    ASSERT_NE(node, nullptr);
+    EXPECT_EQ(read_back->isNodeOccupied(node), tree->isNodeOccupied(*it));
+    const octomap::ColorOcTreeNode::Color c = node->getColor();
+    const VoxelOpinion v = tree->opinion(&*it);
+    if (tree->isNodeOccupied(*it) && it->hasSemantics() && v.label >= 0) {
+      const auto& expected = table.colors[v.label];
+      ASSERT_EQ(c.r, expected[0]);
+      ASSERT_EQ(c.g, expected[1]);
+      ASSERT_EQ(c.b, expected[2]);
+      ++checked;
+    } else if (!it->hasSemantics()) {
+      EXPECT_TRUE(c.r == c.g && c.g == c.b) << "leaf without evidence is not grey";
+      ++grey;
+    }
+  }
+  EXPECT_GT(checked, 100u);
+  EXPECT_GT(grey, 0u);
+}
+
+TEST(ColorExport, UncertaintyColoursFollowTheColourMap) {
+  const auto tree = makeMap("dempster");
+  const auto color = toColorOcTree(*tree, threeClasses(), ColorMode::kUncertainty);
+  // Certain is blue-ish, uncertain red-ish.
+  const ClassTable::Rgb certain = uncertaintyColor(0.0), uncertain = uncertaintyColor(1.0);
+  EXPECT_GT(certain[2], certain[0]);
+  EXPECT_GT(uncertain[0], uncertain[2]);
+  size_t checked = 0;
+  std::set<std::tuple<int, int, int>> distinct;
+  for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
+    if (!it->hasSemantics()) continue;
+    const auto c = color->search(it.getKey(), it.getDepth())->getColor();
+    const ClassTable::Rgb expected = uncertaintyColor(tree->opinion(&*it).uncertainty);
+    ASSERT_EQ(c.r, expected[0]);
+    ASSERT_EQ(c.g, expected[1]);
+    ASSERT_EQ(c.b, expected[2]);
+    distinct.insert({c.r, c.g, c.b});
+    ++checked;
+  }
+  EXPECT_GT(checked, 100u);
+  EXPECT_GT(distinct.size(), 3u);  // the map is not one colour
+}
+
+TEST(ColorExport, ClassTableOfWrongSizeThrows) {
+  const auto tree = makeMap("dempster", 1);
+  ClassTable two = threeClasses();
+  two.names.pop_back();
+  two.colors.pop_back();
+  EXPECT_THROW(toColorOcTree(*tree, two, ColorMode::kClass), std::invalid_argument);
+}
+
+// --- merge -----------------------------------------------------------------------------------------
+
+TEST(Merge, IsSymmetricForEveryRule) {
+  for (const std::string& rule : kFusionRuleNames) {
+    const auto a = makeMap(rule, 1, 10, 0.0f);
+    const auto b = makeMap(rule, 1, 20, 1.3f);  // overlapping, not identical
+    EvidentialOcTree ab(*a), ba(*b);
+    ab.merge(*b);
+    ba.merge(*a);
+    EXPECT_TRUE(compareTrees(ab, ba)) << rule;
+    EXPECT_GT(ab.numSemanticNodes(), a->numSemanticNodes()) << rule;
+  }
+}
+
+TEST(Merge, DempsterPayloadsAddAtSharedVoxels) {
+  const auto a = makeMap("dempster", 1, 10, 0.0f);
+  const auto b = makeMap("dempster", 1, 20, 1.3f);
+  EvidentialOcTree ab(*a);
+  ab.merge(*b);
+  size_t shared = 0;
+  for (auto it = ab.begin_leafs(); it != ab.end_leafs(); ++it) {
+    if (it.getDepth() != ab.getTreeDepth()) continue;
+    const float* pa = a->payload(a->search(it.getKey()));
+    const float* pb = b->payload(b->search(it.getKey()));
+    const float* pab = ab.payload(&*it);
+    if (!pa || !pb) continue;
+    ASSERT_NE(pab, nullptr);
+    for (int c = 0; c < ab.numClasses(); ++c) EXPECT_FLOAT_EQ(pab[c], pa[c] + pb[c]);
+    ++shared;
+  }
+  EXPECT_GT(shared, 50u);
+}
+
+TEST(Merge, WithAnEmptyMapIsIdentity) {
+  for (const std::string& rule : kFusionRuleNames) {
+    const auto a = makeMap(rule);
+    EvidentialOcTree empty(0.2, a->numClasses(), a->config());
+    empty.setClassNames(a->classNames());
+    empty.setProbHit(a->getProbHit());
+    empty.setClampingThresMax(a->getClampingThresMax());
+    EvidentialOcTree a_copy(*a);
+    a_copy.merge(empty);
+    EXPECT_TRUE(compareTrees(a_copy, *a)) << rule << ": a + empty";
+    empty.merge(*a);
+    EXPECT_TRUE(compareTrees(empty, *a)) << rule << ": empty + a";
+  }
+}
+
+TEST(Merge, MismatchedMapsThrowAndChangeNothing) {
+  const auto a = makeMap("dempster", 1);
+  const EvidentialOcTree before(*a);
+  SemanticConfig ebs = a->config();
+  ebs.rule = "ebs";
+  EvidentialOcTree other_c(0.2, 4), other_res(0.1, 3), other_rule(0.2, 3, ebs);
+  octomap::Pointcloud p;
+  p.push_back(1.1f, 0.1f, 0.1f);
+  other_c.insertSemanticScan(p, {1, 2, 3, 4}, octomap::point3d(0.1f, 0.1f, 0.1f));
+  other_res.insertSemanticScan(p, {1, 2, 3}, octomap::point3d(0.1f, 0.1f, 0.1f));
+  other_rule.insertSemanticScan(p, {1, 2, 3}, octomap::point3d(0.1f, 0.1f, 0.1f));
+  EXPECT_ANY_THROW(a->merge(other_c));
+  EXPECT_ANY_THROW(a->merge(other_res));
+  EXPECT_ANY_THROW(a->merge(other_rule));
+  EXPECT_TRUE(compareTrees(*a, before));
+}
+
+// --- corrupt, truncated and foreign files ------------------------------------------------------------
+
+TEST(CorruptFile, TruncationAtAnyOffsetThrows) {
+  TempDir dir;
+  const auto tree = smallMap();
+  const std::string good = dir.file("good.ot");
+  saveMap(*tree, good);
+  const std::string bytes = readBytes(good);
+  ASSERT_GT(bytes.size(), 100u);
+  const std::string cut = dir.file("cut.ot");
+  size_t tried = 0;
+  for (size_t length = 0; length < bytes.size(); length += (length < 64 ? 1 : 7)) {
+    writeBytes(cut, bytes.substr(0, length));
+    EXPECT_THROW(loadMap(cut), std::runtime_error) << "truncated to " << length << " of " << bytes.size();
+    ++tried;
+  }
+  // The last byte too.
+  writeBytes(cut, bytes.substr(0, bytes.size() - 1));
+  EXPECT_THROW(loadMap(cut), std::runtime_error);
+  EXPECT_GT(tried, 20u);
+}
+
+TEST(CorruptFile, TruncatedDataViaAbstractOcTreeReadIsNotAGoodTree) {
+  // Through OctoMap's own reader a truncated file must not look like a complete tree.
+  const auto tree = makeMap("dempster", 1);
+  std::stringstream full;
+  tree->write(full);
+  const std::string bytes = full.str();
+  std::istringstream cut(bytes.substr(0, bytes.size() * 2 / 3));
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(cut));
+  if (any) {
+    auto* t = dynamic_cast<EvidentialOcTree*>(any.get());
+    ASSERT_NE(t, nullptr);
+    EXPECT_FALSE(t->readError().empty());
+    EXPECT_EQ(t->size(), 0u);  // a failed read leaves the tree empty
+  }
+}
+
+// A loaded tree is well-formed when every node can be read back sensibly.
+void expectWellFormed(const EvidentialOcTree& tree, const std::string& context) {
+  ASSERT_GE(tree.numClasses(), 1) << context;
+  ASSERT_LE(tree.numClasses(), 255) << context;
+  size_t nodes = 0, semantic = 0;
+  for (auto it = tree.begin_tree(); it != tree.end_tree(); ++it) {
+    ++nodes;
+    ASSERT_TRUE(std::isfinite(it->getLogOdds())) << context;
+    if (!it->hasSemantics()) continue;
+    ++semantic;
+    ASSERT_NE(tree.payload(&*it), nullptr) << context;
+    const VoxelOpinion v = tree.opinion(&*it);
+    ASSERT_GE(v.label, -1) << context;
+    ASSERT_LT(v.label, tree.numClasses()) << context;
+    ASSERT_TRUE(std::isfinite(v.uncertainty)) << context;
+    ASSERT_GE(v.uncertainty, 0.0f) << context;
+    if (tree.rule().uncertaintyIsMass()) {
+      ASSERT_LE(v.uncertainty, 1.0f) << context;
+    }
+    for (float b : v.belief) {
+      ASSERT_TRUE(std::isfinite(b)) << context;
+      ASSERT_GE(b, 0.0f) << context << ": negative belief from a loaded payload";
+      ASSERT_LE(b, 1.0f) << context;
+    }
+  }
+  EXPECT_EQ(nodes, tree.size()) << context;
+  EXPECT_EQ(semantic, tree.numSemanticNodes()) << context;
+}
+
+TEST(CorruptFile, RandomByteFlipsThrowOrGiveAWellFormedTree) {
+  TempDir dir;
+  for (const std::string& rule : kFusionRuleNames) {
+    SemanticConfig config;
+    config.rule = rule;
+    EvidentialOcTree tree(0.2, 3, config);
+    octomap::Pointcloud points;
+    std::vector<float> evidence;
+    for (int i = 0; i < 6; ++i) {
+      points.push_back(1.1f, -0.5f + 0.2f * i, 0.1f);
+      evidence.insert(evidence.end(), {float(i), 2.0f, 0.5f});
+    }
+    tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.5f));
+    const std::string good = dir.file("good.ot");
+    saveMap(tree, good);
+    const std::string bytes = readBytes(good);
+    const size_t data_start = bytes.find("data\n");
+    ASSERT_NE(data_start, std::string::npos);
+    const std::string flipped_path = dir.file("flipped.ot");
+    std::mt19937 rng(5);
+    size_t threw = 0, loaded = 0;
+    for (int trial = 0; trial < 600; ++trial) {
+      std::string bad = bytes;
+      std::uniform_int_distribution<size_t> where(data_start + 5, bytes.size() - 1);
+      const int flips = 1 + trial % 3;
+      for (int f = 0; f < flips; ++f) {
+        bad[where(rng)] ^= static_cast<char>(1u << std::uniform_int_distribution<int>(0, 7)(rng));
+      }
+      writeBytes(flipped_path, bad);
+      try {
+        const auto t = loadMap(flipped_path);
+        ASSERT_NE(t, nullptr);
+        expectWellFormed(*t, rule + " trial " + std::to_string(trial));
+        if (::testing::Test::HasFatalFailure()) return;
+        ++loaded;
+      } catch (const std::runtime_error&) {
+        ++threw;
+      }
+    }
+    EXPECT_GT(threw, 0u) << rule;
+    RecordProperty("byte_flips_loaded_" + rule, std::to_string(loaded));
+  }
+}
+
+TEST(ForeignFile, ColorOcTreeFileThrowsNamingItsType) {
+  TempDir dir;
+  octomap::ColorOcTree color(0.2);
+  color.updateNode(octomap::point3d(1, 1, 1), true)->setColor(1, 2, 3);
+  const std::string path = dir.file("color.ot");
+  ASSERT_TRUE(color.write(path));
+  try {
+    loadMap(path);
+    FAIL() << "a ColorOcTree was loaded as an EvidentialOcTree";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("ColorOcTree"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  octomap::OcTree plain(0.2);
+  plain.updateNode(octomap::point3d(1, 1, 1), true);
+  const std::string plain_path = dir.file("plain.ot");
+  ASSERT_TRUE(plain.write(plain_path));
+  EXPECT_THROW(loadMap(plain_path), std::runtime_error);
+}
+
+TEST(ForeignFile, NonOctomapFileThrowsNamingThePath) {
+  TempDir dir;
+  const std::string path = dir.file("notes.ot");
+  writeBytes(path, "this is not an octree\n\x01\x02\x03 just text\n");
+  try {
+    loadMap(path);
+    FAIL() << "a text file was loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  const std::string empty = dir.file("empty.ot");
+  writeBytes(empty, "");
+  EXPECT_THROW(loadMap(empty), std::runtime_error);
+}
+
+TEST(ForeignFile, MissingPathThrowsNamingThePath) {
+  TempDir dir;
+  const std::string path = dir.file("nowhere/map.ot");
+  try {
+    loadMap(path);
+    FAIL() << "a missing file was loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
+TEST(ForeignFile, WrongFileTypeIdThrows) {
+  // Our data section under a ColorOcTree id: the ColorOcTree reader must not accept it silently
+  // as a map of ours, and loadMap must refuse it.
+  TempDir dir;
+  const auto tree = smallMap();
+  std::stringstream s;
+  tree->write(s);
+  std::string bytes = s.str();
+  const size_t id = bytes.find("id EvidentialOcTree");
+  ASSERT_NE(id, std::string::npos);
+  bytes.replace(id, std::string("id EvidentialOcTree").size(), "id ColorOcTree");
+  const std::string path = dir.file("relabelled.ot");
+  writeBytes(path, bytes);
+  EXPECT_THROW(loadMap(path), std::runtime_error);
+}
+
+// --- atomic saves ----------------------------------------------------------------------------------
+
+TEST(AtomicSave, SuccessfulSaveLeavesOnlyTheTarget) {
+  TempDir dir;
+  saveMap(*smallMap(), dir.file("map.ot"));
+  saveMap(*makeMap("dempster", 1), dir.file("map.ot"));  // overwrite
+  saveBinaryOccupancy(*smallMap(), dir.file("map.bt"));
+  EXPECT_EQ(dir.entries(), (std::set<std::string>{"map.ot", "map.bt"}));
+}
+
+TEST(AtomicSave, MissingDirectoryThrowsAndLeavesNoTempFile) {
+  TempDir dir;
+  const std::string path = dir.file("no_such_dir/map.ot");
+  try {
+    saveMap(*smallMap(), path);
+    FAIL() << "saving into a missing directory succeeded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(dir.entries().empty());
+  EXPECT_THROW(saveBinaryOccupancy(*smallMap(), path), std::runtime_error);
+  EXPECT_TRUE(dir.entries().empty());
+}
+
+TEST(AtomicSave, FailedSaveLeavesThePreviousFileIntact) {
+  TempDir dir;
+  const std::string path = dir.file("map.ot");
+  const auto small = smallMap();
+  saveMap(*small, path);
+  const std::string previous = readBytes(path);
+  const auto big = makeMap("dempster", 2);
+  {
+    std::stringstream s;
+    big->write(s);
+    ASSERT_GT(s.str().size(), previous.size() + 8192) << "the new map must be larger than the limit";
+  }
+  // A file-size limit makes the write fail part-way, as a full disk would (works for root too).
+  struct rlimit old_limit;
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit limit = old_limit;
+  limit.rlim_cur = previous.size() + 4096;
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &limit), 0);
+  bool threw = false;
+  std::string message;
+  try {
+    saveMap(*big, path);
+  } catch (const std::runtime_error& e) {
+    threw = true;
+    message = e.what();
+  }
+  ::setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_TRUE(threw) << "a save that could not be written completely did not throw";
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  EXPECT_EQ(readBytes(path), previous) << "the previous file was damaged";
+  EXPECT_EQ(dir.entries(), (std::set<std::string>{"map.ot"})) << "temporary file left behind";
+  EXPECT_TRUE(compareTrees(*loadMap(path), *small));
+}
+
+}  // namespace
+}  // namespace evidential_octomap

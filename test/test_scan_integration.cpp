@@ -1,0 +1,531 @@
+// Scan integration on a SYNTHETIC scene with known ground truth (synthetic_scene.h): occupancy by
+// ray casting, semantics by the adaptive kernel, bad inputs, key-range edges, the percentile
+// threshold, leaf creation, and the three fusion rules through one integrator.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
+#include <set>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <octomap/octomap.h>
+
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/scan_integrator.h"
+#include "synthetic_scene.h"
+#include "tree_compare.h"
+
+namespace evidential_octomap {
+namespace {
+
+using test::compareTrees;
+using test::SyntheticScan;
+using test::SyntheticScene;
+
+using KeyTuple = std::tuple<int, int, int>;
+KeyTuple tupleOf(const octomap::OcTreeKey& k) { return {k[0], k[1], k[2]}; }
+
+// Majority true label of the points in each endpoint voxel.
+std::map<KeyTuple, int> groundTruthVoxels(const octomap::OcTree& keys_from, const SyntheticScan& scan,
+                                          int num_classes) {
+  std::map<KeyTuple, std::vector<int>> votes;
+  for (size_t i = 0; i < scan.points_W.size(); ++i) {
+    auto& v = votes[tupleOf(keys_from.coordToKey(scan.points_W.getPoint(i)))];
+    v.resize(num_classes, 0);
+    ++v[scan.labels[i]];
+  }
+  std::map<KeyTuple, int> truth;
+  for (const auto& [key, v] : votes) {
+    truth[key] = int(std::max_element(v.begin(), v.end()) - v.begin());
+  }
+  return truth;
+}
+
+octomap::OcTreeKey keyOf(const KeyTuple& t) {
+  return octomap::OcTreeKey(std::get<0>(t), std::get<1>(t), std::get<2>(t));
+}
+
+// Occupancy and semantic state that a user can observe at a key.
+struct Observation {
+  bool known = false;
+  bool occupied = false;
+  int label = -1;
+  std::vector<float> belief;
+  float uncertainty = 1.0f;
+  bool operator==(const Observation& o) const {
+    return known == o.known && occupied == o.occupied && label == o.label && belief == o.belief &&
+           uncertainty == o.uncertainty;
+  }
+};
+
+Observation observe(const EvidentialOcTree& tree, const octomap::OcTreeKey& key) {
+  Observation o;
+  const EvidentialOcTreeNode* node = tree.search(key);
+  o.known = node != nullptr;
+  if (node) o.occupied = tree.isNodeOccupied(node);
+  const VoxelOpinion v = tree.query(key);
+  o.label = v.label;
+  o.belief = v.belief;
+  o.uncertainty = v.uncertainty;
+  return o;
+}
+
+class SyntheticSceneTest : public ::testing::Test {
+ protected:
+  SyntheticScene scene;
+  SyntheticScan scan = scene.defaultScan();
+  octomap::OcTree key_helper{0.2};  // only for coordToKey at the same resolution
+};
+
+TEST_F(SyntheticSceneTest, SceneHasBothClasses) {
+  // Guards the fixture itself: rays hit both the ground and the box.
+  const auto ground = std::count(scan.labels.begin(), scan.labels.end(), SyntheticScene::kGround);
+  const auto box = std::count(scan.labels.begin(), scan.labels.end(), SyntheticScene::kBox);
+  EXPECT_GT(ground, 1000);
+  EXPECT_GT(box, 100);
+  RecordProperty("synthetic_points", std::to_string(scan.points_W.size()));
+}
+
+TEST_F(SyntheticSceneTest, EndpointVoxelsAreOccupied) {
+  EvidentialOcTree tree(0.2, scene.num_classes);
+  const InsertStats stats = tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  EXPECT_EQ(stats.points_in, scan.points_W.size());
+  EXPECT_EQ(stats.points_skipped, 0u);
+  EXPECT_GT(stats.voxels_updated, 0u);
+  const auto truth = groundTruthVoxels(key_helper, scan, scene.num_classes);
+  size_t occupied = 0;
+  for (const auto& [key, label] : truth) {
+    const EvidentialOcTreeNode* node = tree.search(keyOf(key));
+    ASSERT_NE(node, nullptr);
+    if (tree.isNodeOccupied(node)) ++occupied;
+  }
+  EXPECT_EQ(occupied, truth.size());
+}
+
+TEST_F(SyntheticSceneTest, VoxelsAlongRaysAreFree) {
+  EvidentialOcTree tree(0.2, scene.num_classes);
+  tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  const auto truth = groundTruthVoxels(key_helper, scan, scene.num_classes);
+  size_t checked = 0;
+  for (size_t i = 0; i < scan.points_W.size(); i += 7) {
+    // Discretized insertion casts to the endpoint voxel's centre: sample that ray.
+    const octomap::point3d end = tree.keyToCoord(tree.coordToKey(scan.points_W.getPoint(i)));
+    for (double f : {0.25, 0.5, 0.75}) {
+      const octomap::point3d p = scan.origin_W + (end - scan.origin_W) * float(f);
+      if ((end - p).norm() < 0.5) continue;  // near the surface
+      const octomap::OcTreeKey key = tree.coordToKey(p);
+      if (truth.count(tupleOf(key))) continue;  // some other ray ends here
+      const EvidentialOcTreeNode* node = tree.search(key);
+      ASSERT_NE(node, nullptr) << "unknown voxel on ray " << i << " at " << p;
+      EXPECT_FALSE(tree.isNodeOccupied(node)) << "occupied voxel on ray " << i << " at " << p;
+      EXPECT_LT(node->getLogOdds(), 0.0f);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 500u);
+}
+
+TEST_F(SyntheticSceneTest, ArgmaxIsRightOnSurfaceVoxelsForEveryRule) {
+  const auto truth = groundTruthVoxels(key_helper, scan, scene.num_classes);
+  for (const std::string& rule : kFusionRuleNames) {
+    SemanticConfig config;
+    config.rule = rule;
+    EvidentialOcTree tree(0.2, scene.num_classes, config);
+    ASSERT_EQ(tree.rule().name(), rule);
+    tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+    size_t right = 0, per_class_total[2] = {0, 0}, per_class_right[2] = {0, 0};
+    for (const auto& [key, label] : truth) {
+      const VoxelOpinion v = tree.query(keyOf(key));
+      ASSERT_EQ(v.belief.size(), size_t(scene.num_classes));
+      ++per_class_total[label];
+      if (v.label == label) {
+        ++right;
+        ++per_class_right[label];
+      }
+    }
+    const double accuracy = double(right) / truth.size();
+    RecordProperty("surface_accuracy_" + rule, std::to_string(accuracy));
+    EXPECT_GE(accuracy, 0.95) << rule;
+    // Both classes are recovered, not just the majority one.
+    EXPECT_GE(double(per_class_right[1]) / per_class_total[1], 0.9) << rule;
+    EXPECT_GE(double(per_class_right[0]) / per_class_total[0], 0.9) << rule;
+  }
+}
+
+TEST_F(SyntheticSceneTest, UncertaintyFallsWithRepeatedConsistentScans) {
+  const auto truth = groundTruthVoxels(key_helper, scan, scene.num_classes);
+  EvidentialOcTree once(0.2, scene.num_classes), five(0.2, scene.num_classes);
+  once.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  for (int i = 0; i < 5; ++i) five.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  size_t strictly_lower = 0, comparable = 0;
+  for (const auto& [key, label] : truth) {
+    const float u1 = once.query(keyOf(key)).uncertainty;
+    const float u5 = five.query(keyOf(key)).uncertainty;
+    ASSERT_LT(u1, 1.0f);
+    ASSERT_LE(u5, u1);
+    if (u1 > 1e-30f) {
+      ++comparable;
+      if (u5 < u1) ++strictly_lower;
+    }
+  }
+  ASSERT_GT(comparable, truth.size() / 2);
+  EXPECT_EQ(strictly_lower, comparable);
+}
+
+TEST_F(SyntheticSceneTest, EbsVarianceFallsWithRepeatedConsistentScans) {
+  const auto truth = groundTruthVoxels(key_helper, scan, scene.num_classes);
+  SemanticConfig config;
+  config.rule = "ebs";
+  EvidentialOcTree once(0.2, scene.num_classes, config), five(0.2, scene.num_classes, config);
+  once.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  for (int i = 0; i < 5; ++i) five.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  // Dirichlet variance p(1-p)/(S+1): S grows with every scan while p stays near its value.
+  double sum1 = 0, sum5 = 0;
+  size_t lower = 0;
+  for (const auto& [key, label] : truth) {
+    const float u1 = once.query(keyOf(key)).uncertainty;
+    const float u5 = five.query(keyOf(key)).uncertainty;
+    sum1 += u1;
+    sum5 += u5;
+    if (u5 < u1) ++lower;
+  }
+  EXPECT_LT(sum5, sum1);
+  EXPECT_GE(double(lower) / truth.size(), 0.95);
+}
+
+// --- bad inputs leave the map unchanged -----------------------------------------------------
+
+class BadInputTest : public SyntheticSceneTest {
+ protected:
+  void SetUp() override {
+    tree = std::make_unique<EvidentialOcTree>(0.2, scene.num_classes);
+    tree->insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+    before = std::make_unique<EvidentialOcTree>(*tree);
+    ASSERT_TRUE(compareTrees(*tree, *before));
+    // A second scan from elsewhere that would change the map if it were applied.
+    other = scene.scan(octomap::point3d(1.05f, -0.5f, 1.7f), 99);
+  }
+  void expectUnchanged() {
+    EXPECT_TRUE(compareTrees(*tree, *before));
+    const octomap::OcTreeKey key = tree->coordToKey(other.points_W.getPoint(0));
+    EXPECT_TRUE(observe(*tree, key) == observe(*before, key));
+  }
+  std::unique_ptr<EvidentialOcTree> tree, before;
+  SyntheticScan other;
+};
+
+TEST_F(BadInputTest, NaNEvidenceThrowsAndChangesNothing) {
+  other.evidence[other.evidence.size() / 2] = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(tree->insertSemanticScan(other.points_W, other.evidence, other.origin_W),
+               std::invalid_argument);
+  expectUnchanged();
+}
+
+TEST_F(BadInputTest, InfiniteEvidenceThrowsAndChangesNothing) {
+  other.evidence.back() = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(tree->insertSemanticScan(other.points_W, other.evidence, other.origin_W),
+               std::invalid_argument);
+  expectUnchanged();
+}
+
+TEST_F(BadInputTest, NegativeEvidenceThrowsAndChangesNothing) {
+  other.evidence[5] = -0.01f;
+  EXPECT_THROW(tree->insertSemanticScan(other.points_W, other.evidence, other.origin_W),
+               std::invalid_argument);
+  expectUnchanged();
+}
+
+TEST_F(BadInputTest, EvidenceOfWrongSizeThrowsAndChangesNothing) {
+  std::vector<float> short_evidence(other.evidence.begin(), other.evidence.end() - 1);
+  EXPECT_THROW(tree->insertSemanticScan(other.points_W, short_evidence, other.origin_W),
+               std::invalid_argument);
+  std::vector<float> long_evidence = other.evidence;
+  long_evidence.insert(long_evidence.end(), {1.0f, 1.0f, 1.0f});
+  EXPECT_THROW(tree->insertSemanticScan(other.points_W, long_evidence, other.origin_W),
+               std::invalid_argument);
+  // Evidence for C = 2 handed to a C = 3 map.
+  std::vector<float> two_classes(other.points_W.size() * 2, 1.0f);
+  EXPECT_THROW(tree->insertSemanticScan(other.points_W, two_classes, other.origin_W),
+               std::invalid_argument);
+  expectUnchanged();
+}
+
+TEST_F(BadInputTest, EmptyScanIsFineAndChangesNothing) {
+  InsertStats stats;
+  EXPECT_NO_THROW(stats = tree->insertSemanticScan(octomap::Pointcloud(), {}, other.origin_W));
+  EXPECT_EQ(stats.points_in, 0u);
+  EXPECT_EQ(stats.voxels_updated, 0u);
+  expectUnchanged();
+  EvidentialOcTree empty(0.2, 4);
+  EXPECT_NO_THROW(empty.insertSemanticScan(octomap::Pointcloud(), {}, octomap::point3d(0, 0, 0)));
+  EXPECT_EQ(empty.size(), 0u);
+  EXPECT_EQ(empty.numSemanticNodes(), 0u);
+}
+
+TEST(ScanIntegration, PointsOutsideKeyRangeAreSkippedAndCounted) {
+  // At 0.2 m the key range covers about +-6553 m.
+  EvidentialOcTree tree(0.2, 2);
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  points.push_back(2.1f, 0.1f, 0.1f);
+  evidence.insert(evidence.end(), {5.0f, 0.0f});
+  points.push_back(1e5f, 0.0f, 0.0f);
+  evidence.insert(evidence.end(), {5.0f, 0.0f});
+  points.push_back(0.0f, -2e4f, 0.0f);
+  evidence.insert(evidence.end(), {5.0f, 0.0f});
+  points.push_back(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f);
+  evidence.insert(evidence.end(), {5.0f, 0.0f});
+  points.push_back(0.0f, 0.0f, std::numeric_limits<float>::infinity());
+  evidence.insert(evidence.end(), {5.0f, 0.0f});
+  points.push_back(-1.9f, 0.3f, 0.1f);
+  evidence.insert(evidence.end(), {0.0f, 5.0f});
+  InsertStats stats;
+  ASSERT_NO_THROW(stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f)));
+  EXPECT_EQ(stats.points_in, 6u);
+  EXPECT_EQ(stats.points_skipped, 4u);
+  // The two good points were inserted.
+  EXPECT_TRUE(tree.isNodeOccupied(tree.search(octomap::point3d(2.1f, 0.1f, 0.1f))));
+  EXPECT_EQ(tree.query(octomap::point3d(2.1f, 0.1f, 0.1f)).label, 0);
+  EXPECT_TRUE(tree.isNodeOccupied(tree.search(octomap::point3d(-1.9f, 0.3f, 0.1f))));
+  EXPECT_EQ(tree.query(octomap::point3d(-1.9f, 0.3f, 0.1f)).label, 1);
+}
+
+TEST(ScanIntegration, KernelDoesNotWrapAroundTheKeyRange) {
+  // A point in the last voxel of the key range: its kernel support must not reach voxels on
+  // the far side of the map through key wrap-around (key 65535 + 1 == 0).
+  EvidentialOcTree tree(0.2, 2);
+  const octomap::OcTreeKey edge(65535, 32768, 32768);
+  const octomap::point3d p = tree.keyToCoord(edge);
+  octomap::Pointcloud points;
+  points.push_back(p);
+  const std::vector<float> evidence{20.0f, 0.0f};  // certain point: long support (> 0.5 m)
+  const octomap::point3d origin = p - octomap::point3d(2.0f, 0.0f, 0.0f);
+  tree.insertSemanticScan(points, evidence, origin);
+  ASSERT_EQ(tree.query(edge).label, 0);
+  const double half_range = 32768 * 0.2;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    if (!tree.payload(&*it)) continue;
+    EXPECT_GT(it.getX(), half_range - 10.0) << "semantic leaf at " << it.getCoordinate()
+                                            << " far from the point at " << p;
+  }
+}
+
+TEST(ScanIntegration, PoseOverloadEqualsWorldFrameInsertion) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  const octomap::pose6d T_W_S(2.0, -1.0, 0.5, 0.1, -0.05, 0.7);  // x y z roll pitch yaw
+  // The scan's points relative to its origin, expressed in a sensor frame S.
+  octomap::Pointcloud points_S;
+  const octomap::pose6d T_S_W = T_W_S.inv();
+  for (size_t i = 0; i < scan.points_W.size(); ++i) {
+    points_S.push_back(T_S_W.transform(scan.points_W.getPoint(i)));
+  }
+  octomap::Pointcloud points_W;
+  for (size_t i = 0; i < points_S.size(); ++i) points_W.push_back(T_W_S.transform(points_S.getPoint(i)));
+  EvidentialOcTree by_pose(0.2, scene.num_classes), by_points(0.2, scene.num_classes);
+  by_pose.insertSemanticScan(points_S, scan.evidence, T_W_S);
+  by_points.insertSemanticScan(points_W, scan.evidence, T_W_S.trans());
+  EXPECT_TRUE(compareTrees(by_pose, by_points));
+  EXPECT_GT(by_pose.numSemanticNodes(), 0u);
+}
+
+TEST(ScanIntegration, IntegratorEqualsTreeInsertion) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  SemanticConfig config;
+  config.threads = 1;
+  EvidentialOcTree a(0.2, scene.num_classes, config), b(0.2, scene.num_classes, config);
+  const InsertStats sa = a.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  const InsertStats sb = ScanIntegrator(config).integrate(scan.points_W, scan.evidence, scan.origin_W, &b);
+  EXPECT_TRUE(compareTrees(a, b));
+  EXPECT_EQ(sa.voxels_updated, sb.voxels_updated);
+  EXPECT_EQ(sa.semantic_points, sb.semantic_points);
+}
+
+TEST(ScanIntegration, OneAndTwoThreadsGiveTheSameLabels) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  SemanticConfig one, two;
+  one.threads = 1;
+  two.threads = 2;
+  EvidentialOcTree a(0.2, scene.num_classes, one), b(0.2, scene.num_classes, two);
+  a.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  b.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a.numSemanticNodes(), b.numSemanticNodes());
+  // Summation order across threads may differ in the last bits; labels and occupancy may not.
+  for (auto it = a.begin_leafs(); it != a.end_leafs(); ++it) {
+    const EvidentialOcTreeNode* nb = b.search(it.getKey(), it.getDepth());
+    ASSERT_NE(nb, nullptr);
+    EXPECT_EQ(it->getLogOdds(), nb->getLogOdds());
+    const VoxelOpinion va = a.opinion(&*it), vb = b.opinion(nb);
+    EXPECT_NEAR(va.uncertainty, vb.uncertainty, 1e-5);
+    for (int c = 0; c < scene.num_classes; ++c) EXPECT_NEAR(va.belief[c], vb.belief[c], 1e-5);
+  }
+}
+
+// --- leaf creation by the kernel --------------------------------------------------------------
+
+std::set<KeyTuple> fullDepthLeafKeys(octomap::OcTree& tree) {
+  tree.expand();
+  std::set<KeyTuple> keys;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) keys.insert(tupleOf(it.getKey()));
+  return keys;
+}
+
+std::set<KeyTuple> fullDepthLeafKeys(EvidentialOcTree& tree) {
+  tree.expand();
+  std::set<KeyTuple> keys;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    EXPECT_EQ(it.getDepth(), tree.getTreeDepth());
+    keys.insert(tupleOf(it.getKey()));
+  }
+  return keys;
+}
+
+TEST(KernelLeafCreation, OffTouchesOnlyRayCastLeaves) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  octomap::OcTree plain(0.2);
+  plain.insertPointCloud(scan.points_W, scan.origin_W, -1.0, false, true);
+  SemanticConfig config;
+  config.kernel_creates_leaves = false;
+  EvidentialOcTree tree(0.2, scene.num_classes, config);
+  tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  EXPECT_GT(tree.numSemanticNodes(), 0u);
+  const auto expected = fullDepthLeafKeys(plain);
+  const auto got = fullDepthLeafKeys(tree);
+  EXPECT_EQ(got.size(), expected.size());
+  EXPECT_TRUE(got == expected) << "leaf sets differ from plain OcTree::insertPointCloud";
+  // Same occupancy, voxel by voxel.
+  size_t mismatches = 0;
+  for (const auto& key : expected) {
+    const octomap::OcTreeNode* a = plain.search(keyOf(key));
+    const EvidentialOcTreeNode* b = tree.search(keyOf(key));
+    if (!a || !b || a->getLogOdds() != b->getLogOdds()) ++mismatches;
+  }
+  EXPECT_EQ(mismatches, 0u);
+}
+
+TEST(KernelLeafCreation, OnAddsLeavesAroundSurfacesAtUnknownOccupancy) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  octomap::OcTree plain(0.2);
+  plain.insertPointCloud(scan.points_W, scan.origin_W, -1.0, false, true);
+  SemanticConfig config;
+  config.kernel_creates_leaves = true;
+  EvidentialOcTree tree(0.2, scene.num_classes, config);
+  tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  const auto ray_cast = fullDepthLeafKeys(plain);
+  const auto got = fullDepthLeafKeys(tree);
+  EXPECT_TRUE(std::includes(got.begin(), got.end(), ray_cast.begin(), ray_cast.end()));
+  EXPECT_GT(got.size(), ray_cast.size());
+  for (const auto& key : got) {
+    if (ray_cast.count(key)) continue;
+    const EvidentialOcTreeNode* node = tree.search(keyOf(key));
+    ASSERT_NE(node, nullptr);
+    EXPECT_EQ(node->getLogOdds(), 0.0f);  // created by the kernel: p = 0.5
+    EXPECT_TRUE(node->hasSemantics());
+  }
+}
+
+// --- the percentile threshold -------------------------------------------------------------------
+
+TEST(PercentileThreshold, DropsTheMostUncertainPsiPercent) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  const int num_classes = scene.num_classes;
+  for (double psi : {10.0, 30.0}) {
+    SemanticConfig config;
+    config.ds_multiplier = 0.0;  // every point takes part in the semantic pass
+    config.drop_percent = psi;
+    EvidentialOcTree tree(0.2, num_classes, config);
+    const InsertStats stats = tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+    const size_t n = scan.points_W.size();
+    ASSERT_EQ(stats.semantic_points, n);
+    // u_i = C / (sum e + C), computed here from the evidence.
+    std::vector<double> u(n);
+    for (size_t i = 0; i < n; ++i) {
+      double s = num_classes;
+      for (int c = 0; c < num_classes; ++c) s += scan.evidence[i * num_classes + c];
+      u[i] = num_classes / s;
+    }
+    const size_t above = std::count_if(u.begin(), u.end(), [&](double x) {
+      return float(x) > stats.uncertainty_threshold;
+    });
+    const size_t expected = static_cast<size_t>(std::floor(n * psi / 100.0));
+    // The fixture has no tie at the threshold, so exactly floor(n psi / 100) points go.
+    std::vector<float> uf(u.begin(), u.end());
+    std::sort(uf.begin(), uf.end());
+    ASSERT_LT(uf[n - expected - 1], uf[n - expected]) << "tie at the percentile";
+    EXPECT_EQ(stats.points_dropped_uncertain, expected) << "psi " << psi;
+    // U_thr as reported: what lies above it is what was dropped.
+    EXPECT_EQ(stats.points_dropped_uncertain, above) << "psi " << psi;
+    // The threshold is the (100 - psi)-th percentile of u.
+    std::vector<double> sorted = u;
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_NEAR(stats.uncertainty_threshold, sorted[n - expected - 1], 1e-6) << "psi " << psi;
+  }
+}
+
+TEST(PercentileThreshold, OffOrZeroOrSbkiDropsNothing) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  SemanticConfig off, zero, sbki;
+  off.uncertainty_threshold = false;
+  zero.drop_percent = 0.0;
+  sbki.rule = "sbki";
+  for (const SemanticConfig& config : {off, zero, sbki}) {
+    EvidentialOcTree tree(0.2, scene.num_classes, config);
+    const InsertStats stats = tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+    EXPECT_EQ(stats.points_dropped_uncertain, 0u) << config.rule << " " << config.drop_percent;
+    EXPECT_GT(stats.voxels_updated, 0u);
+  }
+}
+
+TEST(PercentileThreshold, DroppedPointsLeaveNoEvidence) {
+  // Two far-apart points; the more uncertain one is dropped at psi = 50.
+  SemanticConfig config;
+  config.drop_percent = 50.0;
+  config.ds_multiplier = 0.0;
+  EvidentialOcTree tree(0.2, 2, config);
+  octomap::Pointcloud points;
+  points.push_back(2.1f, 0.1f, 0.1f);
+  points.push_back(-2.1f, 0.1f, 0.1f);
+  const std::vector<float> evidence{10.0f, 0.0f, 0.0f, 0.5f};
+  const InsertStats stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
+  EXPECT_EQ(stats.points_dropped_uncertain, 1u);
+  EXPECT_EQ(tree.query(octomap::point3d(2.1f, 0.1f, 0.1f)).label, 0);
+  EXPECT_EQ(tree.query(octomap::point3d(-2.1f, 0.1f, 0.1f)).label, -1);
+  // Occupancy still comes from every point.
+  EXPECT_TRUE(tree.isNodeOccupied(tree.search(octomap::point3d(-2.1f, 0.1f, 0.1f))));
+}
+
+// --- max range ---------------------------------------------------------------------------------
+
+TEST(ScanIntegration, PointsBeyondMaxRangeGiveFreeSpaceOnly) {
+  SemanticConfig config;
+  config.max_range = 5.0;
+  EvidentialOcTree tree(0.2, 2, config);
+  octomap::Pointcloud points;
+  points.push_back(3.1f, 0.1f, 0.1f);
+  points.push_back(-9.9f, 0.1f, 0.1f);  // 10 m away
+  const std::vector<float> evidence{10.0f, 0.0f, 0.0f, 10.0f};
+  const InsertStats stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
+  EXPECT_EQ(stats.points_beyond_range, 1u);
+  EXPECT_EQ(tree.query(octomap::point3d(3.1f, 0.1f, 0.1f)).label, 0);
+  const EvidentialOcTreeNode* far_end = tree.search(octomap::point3d(-9.9f, 0.1f, 0.1f));
+  EXPECT_TRUE(far_end == nullptr || !tree.isNodeOccupied(far_end));
+  EXPECT_EQ(tree.query(octomap::point3d(-9.9f, 0.1f, 0.1f)).label, -1);
+  // Free up to the max range along that ray.
+  const EvidentialOcTreeNode* on_ray = tree.search(octomap::point3d(-3.9f, 0.1f, 0.1f));
+  ASSERT_NE(on_ray, nullptr);
+  EXPECT_FALSE(tree.isNodeOccupied(on_ray));
+}
+
+}  // namespace
+}  // namespace evidential_octomap
