@@ -1,10 +1,13 @@
 // evidential_mapping_node: fuses per-point semantic evidence from cloud_in into an
 // EvidentialOcTree and serves it (see docs/ros.md).
+#include <cstdio>
+
 #include <ros/ros.h>
 
 #include "MappingServer.h"
 
 int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // log lines appear at once under roslaunch
   ros::init(argc, argv, "evidential_mapping_node");
   ros::NodeHandle nh;
   ros::NodeHandle nh_private("~");

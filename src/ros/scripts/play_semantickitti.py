@@ -9,7 +9,7 @@ Directory layout: velodyne/NNNNNN.bin (float32 x y z remission), predictions/NNN
 poses, 12 floats per line), calib.txt (Tr: velodyne -> camera).
 
 Published (REP 105 names):
-  ~cloud   -> remapped to the mapping node's cloud_in; fields x, y, z (float32) and
+  velodyne_points  (remap to the mapping node's cloud_in): fields x, y, z (float32) and
               `evidence` (float32, count C) in frame ~sensor_frame (velodyne);
   /tf      map -> velodyne, T_world_velo(i) = inv(Tr) * P(i) * Tr (semantic-kitti-api);
   ~evidence_source (std_msgs/String, latched) says how the evidence was made.
@@ -173,7 +173,7 @@ def main():
                       len(scans), bag_path)
         return
 
-    cloud_pub = rospy.Publisher("~cloud", PointCloud2, queue_size=2)
+    cloud_pub = rospy.Publisher("velodyne_points", PointCloud2, queue_size=2)
     tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=10)
     source_pub = rospy.Publisher("~evidence_source", String, queue_size=1, latch=True)
     source_pub.publish(String(source))

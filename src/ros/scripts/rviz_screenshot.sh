@@ -3,7 +3,8 @@
 #   bash src/ros/scripts/rviz_screenshot.sh [out.png]      (default docs/images/rviz_demo.png)
 # Needs a built catkin workspace (WS, default build/catkin_ws) and xvfb, imagemagick.
 # Runs demo.launch under Xvfb with software GL, waits until the map has been published after the
-# last scan, waits WAIT seconds more for rviz to draw, grabs the root window, stops everything.
+# last scan (SCANS, default 10), waits WAIT seconds more for rviz to draw, grabs the root window,
+# stops everything. RATE sets the player's scans per second (default 0.4: one scan's insert).
 set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 out="${1:-${root}/docs/images/rviz_demo.png}"
@@ -27,12 +28,13 @@ cleanup() {
 trap cleanup EXIT
 sleep 2
 export DISPLAY="${display}"
-ROS_MASTER_URI="http://localhost:$((11400 + RANDOM % 500))" roslaunch --port "${ROS_PORT:-0}" \
-  evidential_octomap demo.launch rviz:=true rate:=1.0 >"${log}" 2>&1 &
+port=$((11400 + RANDOM % 500))
+export ROS_MASTER_URI="http://localhost:${port}"
+roslaunch --port "${port}" evidential_octomap demo.launch rviz:=true rate:="${RATE:-0.4}" >"${log}" 2>&1 &
 launch_pid=$!
 echo "rviz_screenshot: demo running (log ${log}); waiting for the last scan's map"
 for _ in $(seq 1 240); do
-  grep -q "play_semantickitti: done" "${log}" && grep -q "published views" "${log}" && break
+  grep -q "published views.*over ${SCANS:-10} scans" "${log}" && break
   if ! kill -0 "${launch_pid}" 2>/dev/null; then echo "demo died, see ${log}" >&2; exit 1; fi
   sleep 1
 done
