@@ -162,6 +162,29 @@ TEST(OtFile, EmptyAndSingleClassMapsRoundTrip) {
   EXPECT_TRUE(compareTrees(one, *loadMap(dir.file("one.ot"))));
 }
 
+TEST(OtFile, ManyClassesAndOddNamesRoundTrip) {
+  TempDir dir;
+  EvidentialOcTree tree(0.2, 255);
+  std::vector<std::string> names;
+  for (int c = 0; c < 255; ++c) names.push_back("class " + std::to_string(c));
+  names[0] = "";
+  names[1] = "two words\nand a newline";
+  names[2] = "\xc3\xbc" "nic\xc3\xb6" "de";
+  names[3] = std::string(300, 'x');
+  tree.setClassNames(names);
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  for (int i = 0; i < 50; ++i) {
+    points.push_back(1.1f, -2.5f + 0.1f * i, 0.1f);
+    for (int c = 0; c < 255; ++c) evidence.push_back(c == (i * 7) % 255 ? 9.0f : 0.01f * (c % 5));
+  }
+  tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
+  saveMap(tree, dir.file("c255.ot"));
+  const auto loaded = loadMap(dir.file("c255.ot"));
+  EXPECT_TRUE(compareTrees(tree, *loaded));
+  EXPECT_EQ(loaded->classNames()[1], names[1]);
+}
+
 TEST(OtFile, InsertingAfterLoadContinuesLikeTheOriginal) {
   TempDir dir;
   const auto tree = makeMap("dempster", 1);

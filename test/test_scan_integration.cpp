@@ -433,6 +433,141 @@ TEST(KernelLeafCreation, OnAddsLeavesAroundSurfacesAtUnknownOccupancy) {
   }
 }
 
+TEST(KernelLeafCreation, OccupancyEqualsPlainOcTreeOverSeveralScans) {
+  // Kernel-created leaves start at log-odds 0, which is where OctoMap starts an unknown voxel,
+  // so every voxel a plain OcTree knows has the same log-odds here, with or without creation.
+  SyntheticScene scene;
+  for (bool create : {false, true}) {
+    octomap::OcTree plain(0.2);
+    SemanticConfig config;
+    config.kernel_creates_leaves = create;
+    EvidentialOcTree tree(0.2, scene.num_classes, config);
+    for (int i = 0; i < 4; ++i) {
+      const SyntheticScan scan =
+          scene.scan(octomap::point3d(0.05f + 0.6f * i, -0.3f + 0.2f * i, 1.7f), 40 + i);
+      plain.insertPointCloud(scan.points_W, scan.origin_W, -1.0, false, true);
+      tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+    }
+    const auto keys = fullDepthLeafKeys(plain);
+    fullDepthLeafKeys(tree);  // expands
+    size_t mismatches = 0;
+    for (const auto& key : keys) {
+      const EvidentialOcTreeNode* node = tree.search(keyOf(key));
+      if (!node || node->getLogOdds() != plain.search(keyOf(key))->getLogOdds()) ++mismatches;
+    }
+    EXPECT_EQ(mismatches, 0u) << "kernel_creates_leaves = " << create << " of " << keys.size();
+  }
+}
+
+TEST(KernelLeafCreation, VoxelsUpdatedCountsTheSemanticLeaves) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  EvidentialOcTree tree(0.2, scene.num_classes);
+  const InsertStats stats = tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  tree.expand();
+  size_t semantic_leaves = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) semantic_leaves += it->hasSemantics();
+  EXPECT_EQ(stats.voxels_updated, semantic_leaves);
+}
+
+// --- kernel settings as seen through the integrator ---------------------------------------------
+
+// Evidence reaching the voxel `offset_cells` voxels above a single point at a voxel centre.
+VoxelOpinion neighbourAfterOnePoint(const SemanticConfig& config, const std::vector<float>& evidence,
+                                    int offset_cells) {
+  EvidentialOcTree tree(0.2, static_cast<int>(evidence.size()), config);
+  const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(0.1f, 0.1f, 0.1f));
+  octomap::Pointcloud points;
+  points.push_back(tree.keyToCoord(key));
+  tree.insertSemanticScan(points, evidence, octomap::point3d(-2.9f, 0.1f, 0.1f));
+  return tree.query(octomap::OcTreeKey(key[0], key[1], key[2] + offset_cells));
+}
+
+TEST(KernelSettings, UncertainPointsHaveShortSupportUnlessReferenceCompat) {
+  // e = (0.2, 0, 0): u = 3 / 3.2. Adaptive: L = 0.3 e^{1 - 3 u} ~ 0.05 m, no neighbour.
+  // reference_compat (gamma = 0): L = 0.3 e ~ 0.82 m, so the voxel 0.6 m above gets evidence.
+  const std::vector<float> weak{0.2f, 0.0f, 0.0f};
+  SemanticConfig adaptive, compat;
+  adaptive.uncertainty_threshold = compat.uncertainty_threshold = false;
+  adaptive.ds_multiplier = compat.ds_multiplier = 0.0;
+  compat.reference_compat = true;
+  EXPECT_EQ(compat.effectiveGamma(), 0.0);
+  EXPECT_EQ(neighbourAfterOnePoint(adaptive, weak, 1).label, -1);
+  EXPECT_EQ(neighbourAfterOnePoint(compat, weak, 3).label, 0);
+  EXPECT_EQ(neighbourAfterOnePoint(compat, weak, 5).label, -1);  // 1.0 m > 0.82 m
+}
+
+TEST(KernelSettings, FixedLengthWhenAdaptiveLengthIsOff) {
+  // adaptive_length = false: L = l = 0.3 m for every point, certain or not.
+  SemanticConfig fixed;
+  fixed.adaptive_length = false;
+  fixed.uncertainty_threshold = false;
+  fixed.ds_multiplier = 0.0;
+  const std::vector<float> certain{50.0f, 0.0f, 0.0f}, weak{0.2f, 0.0f, 0.0f};
+  EXPECT_EQ(neighbourAfterOnePoint(fixed, certain, 1).label, 0);
+  EXPECT_EQ(neighbourAfterOnePoint(fixed, weak, 1).label, 0);
+  EXPECT_EQ(neighbourAfterOnePoint(fixed, certain, 2).label, -1);  // 0.4 m > 0.3 m
+  // With the adaptive length a certain point reaches further: 0.3 e^{1 - 3/53} ~ 0.77 m.
+  SemanticConfig adaptive = fixed;
+  adaptive.adaptive_length = true;
+  EXPECT_EQ(neighbourAfterOnePoint(adaptive, certain, 3).label, 0);
+}
+
+TEST(KernelSettings, SbkiUsesThePlainKernelOnTheArgmax) {
+  // S-BKI: alpha[argmax] += k'(d, l, sigma0) with the fixed length l = 0.3 m.
+  SemanticConfig sbki;
+  sbki.rule = "sbki";
+  sbki.ds_multiplier = 0.0;
+  const std::vector<float> e{0.0f, 0.3f, 0.1f};  // uncertain, argmax 1
+  const VoxelOpinion above = neighbourAfterOnePoint(sbki, e, 1);
+  // k'(0.2, 0.3, 1) = (2 + cos(4 pi / 3))/3 (1/3) + sin(4 pi / 3) / (2 pi)
+  const double pi = 3.14159265358979323846;
+  const double k = (2 + std::cos(4 * pi / 3)) / 3 / 3 + std::sin(4 * pi / 3) / (2 * pi);
+  const double prior = sbki.sbki_prior;
+  const double s = 3 * prior + k;
+  EXPECT_EQ(above.label, 1);
+  EXPECT_NEAR(above.belief[1], (prior + k) / s, 1e-5);
+  EXPECT_NEAR(above.belief[0], prior / s, 1e-5);
+}
+
+TEST(ScanIntegration, DownSamplingMergesPointsOfOneCell) {
+  // ds_multiplier 5 at 0.2 m: a 0.04 m grid. Ten points inside one cell are one semantic point.
+  SemanticConfig config;
+  EvidentialOcTree tree(0.2, 2, config);
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  for (int i = 0; i < 10; ++i) {
+    points.push_back(2.105f + 0.001f * i, 0.105f, 0.105f);
+    evidence.insert(evidence.end(), {3.0f, 1.0f});
+  }
+  points.push_back(-2.1f, 0.1f, 0.1f);
+  evidence.insert(evidence.end(), {1.0f, 3.0f});
+  const InsertStats stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
+  EXPECT_EQ(stats.semantic_points, 2u);
+  EXPECT_EQ(tree.query(octomap::point3d(2.1f, 0.1f, 0.1f)).label, 0);
+  EXPECT_EQ(tree.query(octomap::point3d(-2.1f, 0.1f, 0.1f)).label, 1);
+  SemanticConfig none = config;
+  none.ds_multiplier = 0.0;
+  EvidentialOcTree all(0.2, 2, none);
+  EXPECT_EQ(all.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f)).semantic_points, 11u);
+}
+
+TEST(ScanIntegration, InvalidOriginThrowsAndChangesNothing) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  EvidentialOcTree tree(0.2, scene.num_classes);
+  tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  const EvidentialOcTree before(tree);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(tree.insertSemanticScan(scan.points_W, scan.evidence, octomap::point3d(nan, 0, 0)),
+               std::invalid_argument);
+  EXPECT_THROW(tree.insertSemanticScan(scan.points_W, scan.evidence, octomap::point3d(1e6f, 0, 0)),
+               std::invalid_argument);
+  EXPECT_TRUE(compareTrees(tree, before));
+  // Queries at non-finite points are answered, not crashed on.
+  EXPECT_EQ(tree.query(octomap::point3d(nan, 0, 0)).label, -1);
+}
+
 // --- the percentile threshold -------------------------------------------------------------------
 
 TEST(PercentileThreshold, DropsTheMostUncertainPsiPercent) {

@@ -182,20 +182,20 @@ TEST(EvidentialOcTree, UnknownSpaceReadsAsVacuous) {
 
 // --- inner nodes and pruning ----------------------------------------------------------------------
 
-TEST(InnerNodes, SummaryIsThePayloadOfTheRichestChild) {
-  auto tree = scannedTree();
+// Checks every inner node against its children; returns how many summaries were checked.
+size_t expectInnerSummaries(const EvidentialOcTree& tree, const std::string& context) {
   size_t checked = 0;
-  for (auto it = tree->begin_tree(); it != tree->end_tree(); ++it) {
+  for (auto it = tree.begin_tree(); it != tree.end_tree(); ++it) {
     if (it.isLeaf()) continue;
     const EvidentialOcTreeNode* node = &*it;
     const EvidentialOcTreeNode* richest = nullptr;
     double richest_sum = -1e300;
     for (unsigned i = 0; i < 8; ++i) {
-      if (!tree->nodeChildExists(node, i)) continue;
-      const EvidentialOcTreeNode* child = tree->getNodeChild(node, i);
-      if (const float* p = tree->payload(child)) {
+      if (!tree.nodeChildExists(node, i)) continue;
+      const EvidentialOcTreeNode* child = tree.getNodeChild(node, i);
+      if (const float* p = tree.payload(child)) {
         double sum = 0;
-        for (int c = 0; c < tree->numClasses(); ++c) sum += p[c];
+        for (int c = 0; c < tree.numClasses(); ++c) sum += p[c];
         if (sum > richest_sum) {
           richest_sum = sum;
           richest = child;
@@ -203,20 +203,54 @@ TEST(InnerNodes, SummaryIsThePayloadOfTheRichestChild) {
       }
     }
     if (!richest) {
-      EXPECT_FALSE(node->hasSemantics()) << "inner node at depth " << it.getDepth();
+      EXPECT_FALSE(node->hasSemantics()) << context << ": inner node at depth " << it.getDepth();
       continue;
     }
-    ASSERT_TRUE(node->hasSemantics()) << "inner node at depth " << it.getDepth();
-    const float* mine = tree->payload(node);
-    const float* theirs = tree->payload(richest);
-    for (int c = 0; c < tree->numClasses(); ++c) ASSERT_TRUE(test::sameBits(mine[c], theirs[c]));
+    EXPECT_TRUE(node->hasSemantics()) << context << ": inner node at depth " << it.getDepth();
+    if (!node->hasSemantics()) continue;
+    const float* mine = tree.payload(node);
+    const float* theirs = tree.payload(richest);
+    bool same = true;
+    for (int c = 0; c < tree.numClasses(); ++c) same = same && test::sameBits(mine[c], theirs[c]);
+    EXPECT_TRUE(same) << context << ": summary at depth " << it.getDepth()
+                      << " is not the richest child's payload";
     // What a coarse query returns at that depth (depth 0 means full depth in OctoMap).
-    if (it.getDepth() == 0) continue;
-    const VoxelOpinion coarse = tree->query(it.getKey(), it.getDepth());
-    EXPECT_EQ(coarse.belief, tree->opinion(richest).belief);
+    if (it.getDepth() > 0) {
+      EXPECT_EQ(tree.query(it.getKey(), it.getDepth()).belief, tree.opinion(richest).belief) << context;
+    }
     ++checked;
   }
-  EXPECT_GT(checked, 100u);
+  return checked;
+}
+
+TEST(InnerNodes, SummaryIsThePayloadOfTheRichestChild) {
+  for (const std::string& rule : kFusionRuleNames) {
+    auto tree = scannedTree(rule, 1);
+    EXPECT_GT(expectInnerSummaries(*tree, rule + " after one scan"), 100u);
+    // Later scans update only part of the map: summaries above them must follow.
+    SyntheticScene scene;
+    for (int i = 0; i < 3; ++i) {
+      const auto scan = scene.scan(octomap::point3d(1.05f + 0.7f * i, 0.5f - 0.4f * i, 1.7f), 30 + i);
+      tree->insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+      expectInnerSummaries(*tree, rule + " after scan " + std::to_string(i + 2));
+    }
+  }
+}
+
+TEST(InnerNodes, SummariesFollowEditsAndMerges) {
+  auto tree = scannedTree("dempster", 1);
+  // Make one leaf far richer than anything else, then let the summaries follow.
+  auto it = tree->begin_leafs();
+  while (it != tree->end_leafs() && !(it->hasSemantics() && it.getDepth() == tree->getTreeDepth())) ++it;
+  ASSERT_NE(it, tree->end_leafs());
+  const octomap::OcTreeKey key = it.getKey();
+  tree->payloadForUpdate(tree->leafForUpdate(key, false))[1] += 1000.0f;
+  tree->updateInnerNodes();
+  expectInnerSummaries(*tree, "after an edit");
+  EXPECT_EQ(tree->query(key, 1).label, 1);  // the richest voxel speaks for the whole map
+  auto other = scannedTree("dempster", 2);
+  tree->merge(*other);
+  expectInnerSummaries(*tree, "after a merge");
 }
 
 TEST(Pruning, NeverChangesALeafLevelQueryOnAScannedMap) {
