@@ -363,6 +363,21 @@ TEST(Merge, WithAnEmptyMapIsIdentity) {
   }
 }
 
+TEST(Merge, WithItselfDoublesTheEvidence) {
+  // a.merge(a) must either refuse or behave like merging an independent copy of a.
+  const auto a = makeMap("dempster", 1);
+  EvidentialOcTree expected(*a), self(*a);
+  const EvidentialOcTree copy(*a);
+  expected.merge(copy);
+  try {
+    self.merge(self);
+  } catch (const std::exception&) {
+    EXPECT_TRUE(compareTrees(self, *a)) << "a refused self-merge changed the map";
+    return;
+  }
+  EXPECT_TRUE(compareTrees(self, expected));
+}
+
 TEST(Merge, MismatchedMapsThrowAndChangeNothing) {
   const auto a = makeMap("dempster", 1);
   const EvidentialOcTree before(*a);

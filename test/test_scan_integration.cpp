@@ -156,6 +156,37 @@ TEST_F(SyntheticSceneTest, ArgmaxIsRightOnSurfaceVoxelsForEveryRule) {
   }
 }
 
+TEST(ScanIntegration, SceneInTheNegativeOctantIsMappedAlike) {
+  // The same scene shifted by a whole number of voxels into negative coordinates.
+  SyntheticScene scene;
+  const octomap::point3d shift(-100.0f, -50.0f, -3.0f);
+  const SyntheticScan here = scene.defaultScan();
+  SyntheticScan there = here;
+  there.origin_W = here.origin_W + shift;
+  there.points_W = octomap::Pointcloud();
+  for (size_t i = 0; i < here.points_W.size(); ++i) there.points_W.push_back(here.points_W.getPoint(i) + shift);
+  SemanticConfig config;
+  config.ds_multiplier = 0.0;  // a down-sampling grid need not align with the shift
+  EvidentialOcTree a(0.2, scene.num_classes, config), b(0.2, scene.num_classes, config);
+  a.insertSemanticScan(here.points_W, here.evidence, here.origin_W);
+  b.insertSemanticScan(there.points_W, there.evidence, there.origin_W);
+  // Pruned blocks are aligned to the key grid, so compare full-depth leaves. Float rounding
+  // of shifted coordinates may move a ray across a voxel boundary here and there.
+  a.expand();
+  b.expand();
+  EXPECT_NEAR(double(a.getNumLeafNodes()), double(b.getNumLeafNodes()), 0.01 * a.getNumLeafNodes());
+  size_t same_label = 0, total = 0;
+  for (auto it = a.begin_leafs(); it != a.end_leafs(); ++it) {
+    if (!it->hasSemantics()) continue;
+    ++total;
+    const VoxelOpinion va = a.opinion(&*it);
+    const VoxelOpinion vb = b.query(it.getCoordinate() + shift);
+    if (va.label == vb.label) ++same_label;
+  }
+  ASSERT_GT(total, 100u);
+  EXPECT_GE(double(same_label) / total, 0.99);
+}
+
 TEST_F(SyntheticSceneTest, UncertaintyFallsWithRepeatedConsistentScans) {
   const auto truth = groundTruthVoxels(key_helper, scan, scene.num_classes);
   EvidentialOcTree once(0.2, scene.num_classes), five(0.2, scene.num_classes);

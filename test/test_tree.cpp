@@ -377,6 +377,43 @@ TEST(OctoMapApi, UpdateNodeInsidePrunedSemanticBlockKeepsSemantics) {
   }
 }
 
+TEST(OctoMapApi, WriteBinaryKeepsSemanticAnswers) {
+  // OcTree::writeBinary turns the tree into max-likelihood occupancy and prunes it; the
+  // semantic answers at every leaf must survive that.
+  auto tree = scannedTree("dempster", 2);
+  std::map<KeyTuple, std::pair<int, std::vector<float>>> before;
+  tree->expand();
+  for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
+    const VoxelOpinion v = tree->opinion(&*it);
+    before[tupleOf(it.getKey())] = {v.label, v.belief};
+  }
+  std::stringstream bt;
+  ASSERT_TRUE(tree->writeBinary(bt));
+  size_t changed = 0;
+  for (const auto& [key, answer] : before) {
+    const VoxelOpinion v = tree->query(keyOf(key));
+    if (v.label != answer.first || v.belief != answer.second) ++changed;
+  }
+  EXPECT_EQ(changed, 0u);
+}
+
+TEST(EvidentialOcTree, ClearThenInsertEqualsAFreshTree) {
+  SyntheticScene scene;
+  const auto scan = scene.defaultScan();
+  auto used = scannedTree("ebs", 2);
+  used->clear();
+  EXPECT_EQ(used->size(), 0u);
+  EXPECT_EQ(used->numSemanticNodes(), 0u);
+  EXPECT_EQ(used->numClasses(), scene.num_classes);  // settings survive clear()
+  EXPECT_EQ(used->rule().name(), "ebs");
+  SemanticConfig ebs;
+  ebs.rule = "ebs";
+  EvidentialOcTree fresh(0.2, scene.num_classes, ebs);
+  used->insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  fresh.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  EXPECT_TRUE(compareTrees(*used, fresh));
+}
+
 // --- settings -------------------------------------------------------------------------------------
 
 TEST(EvidentialOcTree, ClassCountMustBeOneTo255) {
