@@ -81,7 +81,7 @@ if ((write_docs)); then
   cpu="$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
   commit="$(git -C "${root}" rev-parse --short HEAD 2>/dev/null || echo unknown)"
   dirty=""
-  git -C "${root}" diff --quiet HEAD -- include src CMakeLists.txt 2>/dev/null || dirty=" (+ uncommitted core changes)"
+  git -C "${root}" diff --quiet HEAD -- include src/core CMakeLists.txt 2>/dev/null || dirty=" (+ uncommitted core changes)"
   mkdir -p "${root}/bench/results" "${root}/docs"
   cp "${out_json}" "${root}/bench/results/benchmarks.json"
   {
