@@ -1,0 +1,38 @@
+// Fuzz targets of evidential_octomap, shared by the libFuzzer entry points (fuzz_*.cpp, clang)
+// and the deterministic replay harness (replay_main.cpp, any compiler, run by ctest).
+//
+// Every target takes arbitrary bytes. It returns normally when the library behaved: a clean
+// rejection (nullptr, readError(), std::runtime_error) or a successful read whose result passes
+// the invariants below. A broken invariant calls fuzzFail(), which prints what broke and aborts,
+// so libFuzzer, the sanitizers and the replay harness all see it as a crash.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace evidential_octomap {
+namespace fuzz {
+
+// The .ot reader: octomap::AbstractOcTree::read on the bytes, then (our tree only) every query,
+// leaf iteration, inner-node update, copy, write/read round trip (must be byte-identical), .bt
+// and ColorOcTree export, one small scan insert, and loadMap() on the same bytes, which must
+// agree with the generic reader (success <=> success) and fail only with std::runtime_error.
+int fuzzOtReader(const uint8_t* data, size_t size);
+
+// ClassTable::load on the bytes as a YAML file: returns a valid table or throws
+// std::runtime_error; nothing else.
+int fuzzClassTable(const uint8_t* data, size_t size);
+
+// Silences octomap's and our own diagnostics on std::cerr (thousands of expected
+// "corrupt file" lines per second); sanitizer reports are written to fd 2 directly.
+void silenceDiagnostics();
+// Also points fd 2 at /dev/null (OctoMap prints some errors with fprintf), keeping fuzzFail and
+// sanitizer reports on the original stderr. For the replay harness; libFuzzer has
+// -close_fd_mask=2 for the same purpose and needs fd 2 for its own output.
+void silenceStderr();
+
+[[noreturn]] void fuzzFail(const std::string& what);
+
+}  // namespace fuzz
+}  // namespace evidential_octomap
