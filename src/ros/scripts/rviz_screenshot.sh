@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Renders the demo in rviz headless and saves a screenshot, so anyone can check what a user sees:
 #   bash src/ros/scripts/rviz_screenshot.sh [out.png]      (default docs/images/rviz_demo.png)
+#   RVIZ=rviz_cfg/demo_semantickitti_uncertainty.rviz bash src/ros/scripts/rviz_screenshot.sh \
+#     docs/images/rviz_demo_uncertainty.png               (the uncertainty view)
 # Needs a built catkin workspace (WS, default build/catkin_ws) and xvfb, imagemagick.
 # Runs demo.launch under Xvfb with software GL, waits until the map has been published after the
 # last scan (SCANS, default 10), waits WAIT seconds more for rviz to draw, grabs the root window,
@@ -30,7 +32,10 @@ sleep 2
 export DISPLAY="${display}"
 port=$((11400 + RANDOM % 500))
 export ROS_MASTER_URI="http://localhost:${port}"
-roslaunch --port "${port}" evidential_octomap demo.launch rviz:=true rate:="${RATE:-0.4}" >"${log}" 2>&1 &
+rviz_config="${RVIZ:-rviz_cfg/demo_semantickitti.rviz}"
+[[ "${rviz_config}" = /* ]] || rviz_config="${root}/${rviz_config}"
+roslaunch --port "${port}" evidential_octomap demo.launch rviz:=true rate:="${RATE:-0.4}" \
+  rviz_config:="${rviz_config}" >"${log}" 2>&1 &
 launch_pid=$!
 echo "rviz_screenshot: demo running (log ${log}); waiting for the last scan's map"
 for _ in $(seq 1 240); do
