@@ -118,20 +118,37 @@ def default_path(rel):
     return os.path.join(rospkg.RosPack().get_path("evidential_octomap"), rel)
 
 
+def argv_params():
+    """`_name:=value` arguments, typed as YAML (what rospy would put on the parameter server)."""
+    params = {}
+    for arg in sys.argv[1:]:
+        if arg.startswith("_") and ":=" in arg:
+            name, _, value = arg[1:].partition(":=")
+            params[name] = yaml.safe_load(value)
+    return params
+
+
 def main():
-    rospy.init_node("play_semantickitti")
-    data = rospy.get_param("~data", "") or default_path("data/semantickitti_08_first10")
-    classes = rospy.get_param("~classes", "") or default_path("config/classes_semantickitti.yaml")
-    labels_dir = rospy.get_param("~labels_dir", "predictions")
-    magnitude = float(rospy.get_param("~evidence_magnitude", 20.0))
-    rate = float(rospy.get_param("~rate", 1.0))
-    loop = bool(rospy.get_param("~loop", False))
-    bag_path = rospy.get_param("~bag", "")
-    world = rospy.get_param("~world_frame", "map")
-    sensor = rospy.get_param("~sensor_frame", "velodyne")
-    first = int(rospy.get_param("~first", 0))
-    count = int(rospy.get_param("~count", -1))
-    start_delay = float(rospy.get_param("~start_delay", 1.0))
+    # Writing a bag needs no roscore: then the `_name:=value` arguments are read directly.
+    offline = "bag" in argv_params() and argv_params()["bag"]
+    if offline:
+        params = argv_params()
+        get_param = lambda name, default: params.get(name[1:], default)  # noqa: E731
+    else:
+        rospy.init_node("play_semantickitti")
+        get_param = rospy.get_param
+    data = get_param("~data", "") or default_path("data/semantickitti_08_first10")
+    classes = get_param("~classes", "") or default_path("config/classes_semantickitti.yaml")
+    labels_dir = get_param("~labels_dir", "predictions")
+    magnitude = float(get_param("~evidence_magnitude", 20.0))
+    rate = float(get_param("~rate", 1.0))
+    loop = bool(get_param("~loop", False))
+    bag_path = get_param("~bag", "")
+    world = get_param("~world_frame", "map")
+    sensor = get_param("~sensor_frame", "velodyne")
+    first = int(get_param("~first", 0))
+    count = int(get_param("~count", -1))
+    start_delay = float(get_param("~start_delay", 1.0))
 
     names, lut = load_class_table(classes)
     num_classes = len(names)
@@ -142,7 +159,9 @@ def main():
     source = ("derived: one-hot evidence of magnitude %g from the hard predictions in %s/ "
               "(raw ids -> %d classes via %s); not a network's evidential output"
               % (magnitude, labels_dir, num_classes, os.path.basename(classes)))
-    rospy.logwarn("play_semantickitti: %d scans from %s; evidence is %s", len(scans), data, source)
+    log = print if offline else rospy.loginfo
+    (print if offline else rospy.logwarn)(
+        "play_semantickitti: %d scans from %s; evidence is %s" % (len(scans), data, source))
 
     def scan_messages(index, name, stamp):
         xyzr = np.fromfile(os.path.join(data, "velodyne", name + ".bin"), dtype="<f4").reshape(-1, 4)
@@ -168,9 +187,9 @@ def main():
                 cloud, tf = scan_messages(i, name, stamp)
                 bag.write("/tf", TFMessage([tf]), stamp)
                 bag.write("/velodyne_points", cloud, stamp)
-                rospy.loginfo("bag: scan %s (%d points)", name, cloud.width)
-        rospy.loginfo("wrote %d scans to %s (topics /velodyne_points, /tf, /evidence_source)",
-                      len(scans), bag_path)
+                log("bag: scan %s (%d points)" % (name, cloud.width))
+        log("wrote %d scans to %s (topics /velodyne_points, /tf, /evidence_source)"
+            % (len(scans), bag_path))
         return
 
     cloud_pub = rospy.Publisher("velodyne_points", PointCloud2, queue_size=2)
