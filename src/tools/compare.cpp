@@ -35,68 +35,25 @@ struct CompareOptions {
   double resolution = 0.2;
   EvidenceOptions evidence;
   bool quiet = false;
-  bool full = false;
+  std::string plan = "default";
   bool explicit_selection = false;  // --sources/--variants/--protocols given: full cross product
 };
 
-// Default plan (about 17 ten-scan maps, < 10 min on 2 cores): every variant with onehot
-// evidence (the peers' setup in BENCHMARKS.md); dempster with and without threshold, sbki and
-// ebs with the knn-vote and confusion sources (what each source does to the threshold); the
-// held-out protocol for dempster, sbki and ebs with onehot.
-const std::vector<std::string> kCoreVariants{"dempster", "dempster-no-threshold", "sbki", "ebs"};
-const std::vector<std::string> kHeldOutVariants{"dempster", "sbki", "ebs"};
-
+// Plans. default (the demo; about 10 min on 2 cores): every variant with onehot evidence (the
+// peers' setup in BENCHMARKS.md); dempster with and without threshold for knn-vote and confusion
+// (what each source does to the percentile threshold); held-out: dempster, sbki, ebs with onehot.
+// extended: also sbki and ebs with knn-vote and confusion. full: every variant x source x
+// protocol. Giving --sources/--variants/--protocols runs exactly their cross product.
 std::vector<std::string> plannedVariants(const CompareOptions& o, const std::string& protocol,
                                          const std::string& source) {
-  if (o.full || o.explicit_selection) return o.variants;
+  if (o.plan == "full" || o.explicit_selection) return o.variants;
   if (protocol == "held-out") {
-    return source == "onehot" ? kHeldOutVariants : std::vector<std::string>{};
+    return source == "onehot" ? std::vector<std::string>{"dempster", "sbki", "ebs"}
+                              : std::vector<std::string>{};
   }
-  return source == "onehot" ? o.variants : kCoreVariants;
-}
-
-SemanticConfig variantConfig(const std::string& v, SemanticConfig c) {
-  if (v == "dempster") {
-    c.rule = "dempster";
-  } else if (v == "dempster-no-adaptive") {
-    c.rule = "dempster";
-    c.adaptive_length = false;
-  } else if (v == "dempster-no-threshold") {
-    c.rule = "dempster";
-    c.uncertainty_threshold = false;
-  } else if (v == "dempster-no-both") {
-    c.rule = "dempster";
-    c.adaptive_length = false;
-    c.uncertainty_threshold = false;
-  } else if (v == "reference_compat") {
-    c.rule = "dempster";
-    c.reference_compat = true;
-  } else if (v == "sbki" || v == "ebs") {
-    c.rule = v;
-  } else {
-    throw std::invalid_argument("unknown variant '" + v + "'");
-  }
-  return c;
-}
-
-std::string num4(double v) {
-  if (!std::isfinite(v)) return "–";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(4) << v;
-  return s.str();
-}
-
-// Classes present in GT whose map IoU is 0 although the input's is not: what the percentile
-// threshold (or the kernel) wiped out.
-std::string lostClasses(const RunReport& r, const ClassTable& classes) {
-  std::string out;
-  for (int c = 0; c < classes.numClasses(); ++c) {
-    if (c == classes.ignore_class || !r.map.confusion_all.presentInGt(c)) continue;
-    if (r.map.confusion.iou(c) == 0.0 && r.input.confusion.iou(c) > 0.0) {
-      out += (out.empty() ? "" : ", ") + classes.names[c];
-    }
-  }
-  return out.empty() ? "–" : out;
+  if (source == "onehot") return o.variants;
+  if (o.plan == "extended") return {"dempster", "dempster-no-threshold", "sbki", "ebs"};
+  return {"dempster", "dempster-no-threshold"};
 }
 
 struct Section {
@@ -258,11 +215,8 @@ void runCompare(const CompareOptions& o) {
      << o.resolution << " m; every other parameter at its SemanticConfig default unless the "
      << "variant changes it (see compare.json). All evidence here is **derived from hard "
         "labels**, not produced by an EDL network. Runs: "
-     << (o.full ? "--full (every variant x source x protocol)"
-                : o.explicit_selection ? "the --sources/--variants/--protocols given"
-                                       : "default plan (every variant with onehot; dempster, "
-                                         "dempster-no-threshold, sbki, ebs with knn-vote and "
-                                         "confusion; held-out: dempster, sbki, ebs with onehot)")
+     << (o.explicit_selection ? std::string("the --sources/--variants/--protocols given")
+                              : "--plan " + o.plan + " (see compare --help)")
      << ".\n\n";
   for (const Section& s : sections) {
     md << "## " << s.title << "\n\n";
@@ -338,10 +292,13 @@ void addCompareCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--knn-radius", o->evidence.knn_radius, "Neighbour radius of knn-vote [m]")
       ->capture_default_str();
-  cmd->add_flag("--full", o->full,
-                "Every variant x every source x every protocol (about 2.5x the default time). "
-                "Default: all variants with onehot; dempster, dempster-no-threshold, sbki, ebs "
-                "with knn-vote and confusion; held-out with onehot for dempster, sbki, ebs");
+  cmd->add_option("--plan", o->plan,
+                  "default: every variant with onehot, dempster with/without threshold for "
+                  "knn-vote and confusion, held-out dempster/sbki/ebs with onehot (~10 min); "
+                  "extended: also sbki and ebs for knn-vote and confusion; full: every variant x "
+                  "source x protocol")
+      ->check(CLI::IsMember({"default", "extended", "full"}))
+      ->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bars or per-run lines on stderr");
   cmd->callback([o, cmd]() {
     o->explicit_selection =

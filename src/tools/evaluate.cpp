@@ -93,6 +93,10 @@ void addEvalCommand(CLI::App& app) {
                   "What evidence the map was built from (printed in the outputs)");
   cmd->add_flag("--synthetic-predictions", o->synthetic,
                 "Input predictions = GT with the synthetic noise model (as `map`)");
+  cmd->add_option("--noise-point-rate", o->noise.point_rate, "Synthetic point-noise rate")
+      ->capture_default_str();
+  cmd->add_option("--noise-region-rate", o->noise.region_rate, "Synthetic region-flip rate")
+      ->capture_default_str();
   cmd->add_option("--noise-seed", o->noise.seed, "Synthetic noise seed")->capture_default_str();
   cmd->callback([o]() { runEval(*o); });
 }
