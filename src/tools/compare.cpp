@@ -39,6 +39,50 @@ struct CompareOptions {
   bool explicit_selection = false;  // --sources/--variants/--protocols given: full cross product
 };
 
+SemanticConfig variantConfig(const std::string& v, SemanticConfig c) {
+  if (v == "dempster") {
+    c.rule = "dempster";
+  } else if (v == "dempster-no-adaptive") {
+    c.rule = "dempster";
+    c.adaptive_length = false;
+  } else if (v == "dempster-no-threshold") {
+    c.rule = "dempster";
+    c.uncertainty_threshold = false;
+  } else if (v == "dempster-no-both") {
+    c.rule = "dempster";
+    c.adaptive_length = false;
+    c.uncertainty_threshold = false;
+  } else if (v == "reference_compat") {
+    c.rule = "dempster";
+    c.reference_compat = true;
+  } else if (v == "sbki" || v == "ebs") {
+    c.rule = v;
+  } else {
+    throw std::invalid_argument("unknown variant '" + v + "'");
+  }
+  return c;
+}
+
+std::string num4(double v) {
+  if (!std::isfinite(v)) return "–";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(4) << v;
+  return s.str();
+}
+
+// Classes present in GT whose map IoU is 0 although the input's is not: what the percentile
+// threshold (or the kernel) wiped out.
+std::string lostClasses(const RunReport& r, const ClassTable& classes) {
+  std::string out;
+  for (int c = 0; c < classes.numClasses(); ++c) {
+    if (c == classes.ignore_class || !r.map.confusion_all.presentInGt(c)) continue;
+    if (r.map.confusion.iou(c) == 0.0 && r.input.confusion.iou(c) > 0.0) {
+      out += (out.empty() ? "" : ", ") + classes.names[c];
+    }
+  }
+  return out.empty() ? "–" : out;
+}
+
 // Plans. default (the demo; about 10 min on 2 cores): every variant with onehot evidence (the
 // peers' setup in BENCHMARKS.md); dempster with and without threshold for knn-vote and confusion
 // (what each source does to the percentile threshold); held-out: dempster, sbki, ebs with onehot.
