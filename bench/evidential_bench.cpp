@@ -611,8 +611,16 @@ int main(int argc, char** argv) try {
     sum_line("hz_semantic2t_" + tag, hz,
              "semantic insert (2 thr) rate, range " + rangeName(r) + ": " + fmt(hz, 2) +
                  " Hz" + (r > 0 ? " (target >= 10)" : ""));
+    const double hz_bound = 2000.0 / sem2.medianOfScans(sem2.cpu);
+    sum_line("hz_bound_idle_2core_" + tag, hz_bound,
+             "rate bound from CPU time, range " + rangeName(r) + ": 2 idle cores x perfect "
+             "scaling = 2000 / CPU ms = " + fmt(hz_bound, 2) + " Hz");
     if (!o.quick) {
       const Series& sem1 = find("semantic", r, 1, true);
+      const double hz1 = 1000.0 / sem1.medianOfScans(sem1.cpu);
+      sum_line("hz_1t_cpu_" + tag, hz1,
+               "1-thread semantic insert, rate from CPU time (= idle wall), range " +
+                   rangeName(r) + ": " + fmt(hz1, 2) + " Hz");
       const double speedup = sem1.sum(sem1.total) / sem2.sum(sem2.total);
       sum_line("speedup_2t_vs_1t_" + tag, speedup,
                "semantic insert speed-up 2 thr vs 1 thr, range " + rangeName(r) + ": " +
@@ -646,6 +654,10 @@ int main(int argc, char** argv) try {
                fmt(rss_sem["peak_rss_mb"]) + " MB, plain OcTree " + fmt(rss_plain["peak_rss_mb"]) +
                " MB");
   summary.set("peak_rss_mb_plain", rss_plain["peak_rss_mb"]);
+  sum_line("ot_mb_semantic", semantic_stats.ot_bytes / 1048576.0,
+           ".ot size after " + std::to_string(o.scans) + " scans: semantic " +
+               fmt(semantic_stats.ot_bytes / 1048576.0, 2) + " MB, plain OcTree " +
+               fmt(plain_stats.ot_bytes / 1048576.0, 2) + " MB");
 
   // ============================================================================================
   // JSON.
@@ -845,7 +857,12 @@ int main(int argc, char** argv) try {
   md << "| leaves: total / occupied / free / semantic / pruned | " << semantic_stats.leaves << " / "
      << semantic_stats.occupied_leaves << " / " << semantic_stats.free_leaves << " / "
      << semantic_stats.semantic_leaves << " / " << semantic_stats.pruned_leaves << " |\n";
-  md << "| payload slots in use (leaves + inner summaries) | " << semantic_stats.semantic_nodes << " |\n";
+  md << "| payload slots in use: semantic leaves + inner summaries = total | "
+     << semantic_stats.semantic_leaves << " + "
+     << semantic_stats.semantic_nodes - std::min(semantic_stats.semantic_nodes, semantic_stats.semantic_leaves)
+     << " = " << semantic_stats.semantic_nodes << " |\n";
+  md << "| payload pool: reserved (capacity, incl. free list) / in use | " << fmt(pool_bytes / 1048576.0)
+     << " MB / " << fmt(semantic_stats.semantic_nodes * 4.0 * C / 1048576.0) << " MB |\n";
   md << "| `memoryUsage()`: semantic tree / plain tree | " << fmt(semantic_stats.memory_usage / 1048576.0)
      << " MB / " << fmt(plain_stats.memory_usage / 1048576.0) << " MB |\n";
   md << "| peak RSS after " << scans.size() << " scans (separate process, getrusage): semantic / plain | "
