@@ -104,6 +104,7 @@ void record(std::vector<std::vector<double>>& v, size_t scan, double value) {
 struct TreeStats {
   size_t nodes = 0, leaves = 0, inner = 0;
   size_t occupied_leaves = 0, free_leaves = 0, semantic_leaves = 0, pruned_leaves = 0;
+  size_t zero_log_odds_leaves = 0;  // never hit or missed by a ray (kernel-created leaves)
   size_t semantic_nodes = 0;  // payload slots in use (leaves and inner summaries)
   size_t memory_usage = 0;    // tree.memoryUsage()
   size_t memory_nodes = 0;    // OctoMap's own part (nodes + child arrays)
@@ -118,6 +119,7 @@ void countLeaves(const Tree& tree, TreeStats* s) {
     ++s->leaves;
     if (tree.isNodeOccupied(*it)) ++s->occupied_leaves; else ++s->free_leaves;
     if (it.getDepth() < tree.getTreeDepth()) ++s->pruned_leaves;
+    if (it->getLogOdds() == 0.0f) ++s->zero_log_odds_leaves;
   }
   s->nodes = tree.size();
   s->inner = s->nodes - s->leaves;
@@ -169,6 +171,7 @@ Json statsJson(const TreeStats& s) {
   Json j = Json::object();
   j.set("nodes", s.nodes).set("leaves", s.leaves).set("inner_nodes", s.inner);
   j.set("occupied_leaves", s.occupied_leaves).set("free_leaves", s.free_leaves);
+  j.set("zero_log_odds_leaves", s.zero_log_odds_leaves);
   j.set("pruned_leaves", s.pruned_leaves).set("semantic_leaves", s.semantic_leaves);
   j.set("semantic_nodes", s.semantic_nodes).set("memory_usage_bytes", s.memory_usage);
   j.set("memory_nodes_bytes", s.memory_nodes).set("write_ms", s.write_ms);
@@ -376,7 +379,7 @@ int rssChild(const Options& o) {
   const double before = evbench::currentRssMb();
   if (o.rss_child == "plain") {
     octomap::OcTree tree(o.resolution);
-    for (const auto& s : scans) evbench::plainInsert(tree, s.points_W, s.origin_W, o.rss_range, false);
+    for (const auto& s : scans) evbench::plainInsert(tree, s.points_W, s.origin_W, o.rss_range, true);
     std::printf("rss_after_map_mb %.3f\n", evbench::currentRssMb());
   } else {
     SemanticConfig config;
@@ -483,7 +486,8 @@ int main(int argc, char** argv) try {
       const bool first = rep == 0;
       const bool ref = s.max_range < 0 && s.threads == 2;
       if (s.kind == "plain") {
-        runner.plain(&s, first && s.max_range < 0 && !s.discretize ? &plain_stats : nullptr);
+        // Memory reference: the plain OcTree on the same rays as ours (discretize).
+        runner.plain(&s, first && s.max_range < 0 && s.discretize ? &plain_stats : nullptr);
       } else if (s.kind == "prototype") {
         runner.prototype(&s);
       } else {
@@ -854,21 +858,26 @@ int main(int argc, char** argv) try {
   md << "| semantic leaf: node + payload 4·C = " << 4 * C << " B, pooled | "
      << fmt(semantic_leaf_bytes) << " B incl. inner summaries and pool slack (target " << fmt(semantic_leaf_target, 0)
      << " B; bare: " << node_bytes + 4 * C << " B) |\n";
-  md << "| leaves: total / occupied / free / semantic / pruned | " << semantic_stats.leaves << " / "
-     << semantic_stats.occupied_leaves << " / " << semantic_stats.free_leaves << " / "
-     << semantic_stats.semantic_leaves << " / " << semantic_stats.pruned_leaves << " |\n";
+  md << "| semantic tree leaves: total / occupied / free / semantic / pruned / log-odds exactly 0 "
+        "(kernel-created, never on a ray; OctoMap counts them occupied) | "
+     << semantic_stats.leaves << " / " << semantic_stats.occupied_leaves << " / "
+     << semantic_stats.free_leaves << " / " << semantic_stats.semantic_leaves << " / "
+     << semantic_stats.pruned_leaves << " / " << semantic_stats.zero_log_odds_leaves << " |\n";
+  md << "| plain OcTree (discretize, same rays) leaves: total / occupied / free / pruned | "
+     << plain_stats.leaves << " / " << plain_stats.occupied_leaves << " / "
+     << plain_stats.free_leaves << " / " << plain_stats.pruned_leaves << " |\n";
   md << "| payload slots in use: semantic leaves + inner summaries = total | "
      << semantic_stats.semantic_leaves << " + "
      << semantic_stats.semantic_nodes - std::min(semantic_stats.semantic_nodes, semantic_stats.semantic_leaves)
      << " = " << semantic_stats.semantic_nodes << " |\n";
   md << "| payload pool: reserved (capacity, incl. free list) / in use | " << fmt(pool_bytes / 1048576.0)
      << " MB / " << fmt(semantic_stats.semantic_nodes * 4.0 * C / 1048576.0) << " MB |\n";
-  md << "| `memoryUsage()`: semantic tree / plain tree | " << fmt(semantic_stats.memory_usage / 1048576.0)
+  md << "| `memoryUsage()`: semantic tree / plain tree (discretize) | " << fmt(semantic_stats.memory_usage / 1048576.0)
      << " MB / " << fmt(plain_stats.memory_usage / 1048576.0) << " MB |\n";
   md << "| peak RSS after " << scans.size() << " scans (separate process, getrusage): semantic / plain | "
      << fmt(rss_sem["peak_rss_mb"]) << " MB / " << fmt(rss_plain["peak_rss_mb"])
      << " MB (of which scans loaded before mapping: " << fmt(rss_sem["rss_before_map_mb"]) << " MB) |\n";
-  md << "| `.ot` size: semantic (saveMap) / plain (OcTree::write) | "
+  md << "| `.ot` size: semantic (saveMap) / plain discretize (OcTree::write) | "
      << fmt(semantic_stats.ot_bytes / 1048576.0, 2) << " MB / " << fmt(plain_stats.ot_bytes / 1048576.0, 2)
      << " MB |\n";
   md << "| `tree.write(stringstream)`: semantic / plain | " << fmt(semantic_stats.write_ms) << " ms / "
