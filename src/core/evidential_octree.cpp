@@ -8,6 +8,7 @@
 #include <limits>
 #include <numeric>
 #include <sstream>
+#include <utility>
 #include <stdexcept>
 
 #include "evidential_octomap/scan_integrator.h"
@@ -268,6 +269,20 @@ uint64_t spreadBits(uint64_t v) {  // the 16 bits of v to every third bit
 uint64_t mortonCode(const octomap::OcTreeKey& k) {
   return spreadBits(k[2]) << 2 | spreadBits(k[1]) << 1 | spreadBits(k[0]);
 }
+// Stable LSD radix sort on the 48-bit Morton code: three 16-bit passes, about twice as fast as
+// std::sort for the ~1.5 M updates of a scan (bench/README.md).
+void radixSortByCode(std::vector<std::pair<uint64_t, uint32_t>>& items) {
+  std::vector<std::pair<uint64_t, uint32_t>> buffer(items.size());
+  std::vector<size_t> offsets(1 << 16);
+  for (int shift = 0; shift < 48; shift += 16) {
+    std::fill(offsets.begin(), offsets.end(), 0);
+    for (const auto& item : items) ++offsets[(item.first >> shift) & 0xFFFF];
+    size_t sum = 0;
+    for (size_t& offset : offsets) sum += std::exchange(offset, sum);
+    for (const auto& item : items) buffer[offsets[(item.first >> shift) & 0xFFFF]++] = item;
+    items.swap(buffer);
+  }
+}
 }  // namespace
 
 struct EvidentialOcTree::UpdateBatch {
@@ -281,7 +296,7 @@ size_t EvidentialOcTree::applyUpdates(std::vector<VoxelUpdate> updates,
   if (updates.empty()) return 0;
   std::vector<std::pair<uint64_t, uint32_t>> order(updates.size());
   for (size_t i = 0; i < updates.size(); ++i) order[i] = {mortonCode(updates[i].key), uint32_t(i)};
-  std::sort(order.begin(), order.end());
+  radixSortByCode(order);
   // Sorted and merged per key: occupancy from the ray set, increments from the kernel.
   std::vector<VoxelUpdate> sorted;
   sorted.reserve(updates.size());
