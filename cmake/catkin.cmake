@@ -4,7 +4,7 @@
 
 set(EVIDENTIAL_OCTOMAP_CATKIN_COMPONENTS
   roscpp roslib std_msgs std_srvs sensor_msgs geometry_msgs visualization_msgs
-  tf2 tf2_ros message_filters cv_bridge dynamic_reconfigure)
+  tf2 tf2_ros message_filters cv_bridge dynamic_reconfigure nodelet pluginlib)
 
 find_package(catkin REQUIRED COMPONENTS message_generation ${EVIDENTIAL_OCTOMAP_CATKIN_COMPONENTS})
 

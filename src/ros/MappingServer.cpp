@@ -95,7 +95,9 @@ uint32_t clearBox(EvidentialOcTree* tree, const octomap::point3d& min, const oct
 // Warns about a dropped cloud: a new kind of problem at once, repeats of one kind at most every
 // 2 s (the kind is the message without its digits, so "point 17" and "point 3" are one kind).
 void warnDropped(const std::string& message) {
+  static std::mutex mutex;  // tf2 failure callbacks run outside the server's lock
   static std::map<std::string, ros::WallTime> last;
+  std::lock_guard<std::mutex> lock(mutex);
   std::string kind;
   for (char ch : message)
     if (!std::isdigit(static_cast<unsigned char>(ch))) kind += ch;

@@ -33,7 +33,10 @@ namespace {
 constexpr int kC = 20;        // SemanticKITTI table
 constexpr int kBuilding = 13;  // colour (255, 200, 0)
 constexpr int kRoad = 9;
-const std::string kNode = "/evidential_mapping_node";
+// Where the server's services live and which node's /rosout lines are its log (a nodelet logs
+// under its manager's name): ~server and ~log_node of the test node.
+std::string kNode = "/evidential_mapping_node";
+std::string kLogNode = kNode;
 
 // The sensor sits at (1, 0, 0) in map; its clouds are in frame "lidar".
 // Scene (sensor frame): a wall of class `wall_class` at x = 4 (map x = 5), y in [-2, 2],
@@ -128,7 +131,7 @@ class MappingNodeTest : public ::testing::Test {
   void onUncertainty(const visualization_msgs::MarkerArrayConstPtr& m) { uncertainty_ = m; }
   void onCloud(const sensor_msgs::PointCloud2ConstPtr& m) { cloud_ = m; }
   void onLog(const rosgraph_msgs::LogConstPtr& m) {
-    if (m->name == kNode) logs_.push_back(m->msg);
+    if (m->name == kLogNode) logs_.push_back(m->msg);
   }
 
   // Spins until `done` holds; false after 60 s (a hang guard, not a timing assertion).
@@ -452,6 +455,8 @@ TEST_F(RobustnessTest, MissingTfDropsTheCloud) {
 int main(int argc, char** argv) {
   testing::InitGoogleTest(&argc, argv);
   ros::init(argc, argv, "test_mapping_node");
-  ros::NodeHandle nh;
+  ros::NodeHandle nh, pnh("~");
+  pnh.param("server", kNode, kNode);
+  pnh.param("log_node", kLogNode, kNode);
   return RUN_ALL_TESTS();
 }
