@@ -197,7 +197,14 @@ std::unique_ptr<EvidentialOcTree> MappingServer::makeTree() {
   auto tree = std::make_unique<EvidentialOcTree>(config_.resolution, config_.num_classes,
                                                  semantic_config_);
   tree->setClassNames(classes_.names);
-  readOccupancyParams(pnh_, tree.get());
+  if (tree_) {  // keep the sensor model in use (it may have been changed at run time)
+    tree->setProbHit(tree_->getProbHit());
+    tree->setProbMiss(tree_->getProbMiss());
+    tree->setClampingThresMin(tree_->getClampingThresMin());
+    tree->setClampingThresMax(tree_->getClampingThresMax());
+  } else {
+    readOccupancyParams(pnh_, tree.get());
+  }
   return tree;
 }
 
@@ -455,12 +462,14 @@ bool MappingServer::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
 
 bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
   std::lock_guard<std::mutex> lock(mutex_);
-  // Reset re-reads the semantic parameters, so ~rule (not run-time reconfigurable) can change.
-  SemanticConfig config = semantic_config_;
-  readSemanticConfig(pnh_, &config);
+  // Run-time (dynamic_reconfigure) values stay; ~rule and ~sbki_prior, which change what a
+  // stored voxel means and so cannot change on a live map, are re-read here.
+  std::string rule = semantic_config_.rule;
+  pnh_.param("rule", rule, rule);
+  pnh_.param("sbki_prior", semantic_config_.sbki_prior, semantic_config_.sbki_prior);
   try {
-    fusionRuleFromName(config.rule);
-    semantic_config_ = config;
+    fusionRuleFromName(rule);
+    semantic_config_.rule = rule;
   } catch (const std::exception& e) {
     ROS_ERROR("reset: %s; keeping rule %s", e.what(), semantic_config_.rule.c_str());
   }

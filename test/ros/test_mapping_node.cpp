@@ -12,6 +12,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <octomap/AbstractOcTree.h>
+#include <dynamic_reconfigure/Reconfigure.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
 #include <sensor_msgs/PointCloud2.h>
@@ -381,6 +382,31 @@ TEST_F(MappingNodeTest, ClearBbxClearsOnlyInside) {
   EXPECT_EQ(r.labels[2], kBuilding);      // outside: kept
   EXPECT_EQ(r.labels[3], kBuilding);      // just outside the box edge (y < 0.5)
   EXPECT_EQ(r.labels[4], kRoad);
+}
+
+// Sets one double through dynamic_reconfigure's ~set_parameters.
+bool setDouble(const std::string& name, double value) {
+  dynamic_reconfigure::Reconfigure srv;
+  dynamic_reconfigure::DoubleParameter p;
+  p.name = name;
+  p.value = value;
+  srv.request.config.doubles.push_back(p);
+  return ros::service::call(kNode + "/set_parameters", srv);
+}
+
+TEST_F(MappingNodeTest, MaxRangeChangesAtRunTimeAndSurvivesReset) {
+  // The wall is 4 m from the sensor, the road patch 1.9-2.8 m: a 3 m range keeps only the road.
+  ASSERT_TRUE(setDouble("sensor_model_max_range", 3.0));
+  callReset();
+  insert(cloudOf(scene()));
+  auto r = query({gp(5.05, 0.0, 0.75), gp(2.5, 0.0, -1.5)});
+  EXPECT_EQ(r.labels[0], -1);     // beyond range: no semantic evidence
+  EXPECT_EQ(r.labels[1], kRoad);  // within range
+  ASSERT_TRUE(setDouble("sensor_model_max_range", -1.0));
+  callReset();
+  insert(cloudOf(scene()));
+  r = query({gp(5.05, 0.0, 0.75)});
+  EXPECT_EQ(r.labels[0], kBuilding);
 }
 
 // --- robustness ----------------------------------------------------------------------------
