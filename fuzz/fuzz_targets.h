@@ -32,6 +32,10 @@ void silenceDiagnostics();
 // -close_fd_mask=2 for the same purpose and needs fd 2 for its own output.
 void silenceStderr();
 
+// fuzzOtReader inserts a scan into one loaded map in four (chosen by a hash of the input) to
+// keep libFuzzer fast; the replay harness makes it do so for every input.
+void setAlwaysHeavy(bool always);
+
 [[noreturn]] void fuzzFail(const std::string& what);
 
 }  // namespace fuzz

@@ -240,8 +240,9 @@ int main(int argc, char** argv) {
     ++executed;
   };
 
+  evidential_octomap::fuzz::setAlwaysHeavy(true);
   for (const auto& file : regressions) {
-    if (verbose) std::cout << "regression " << file << "\n";
+    std::cout << "regression " << file << std::endl;
     execute(readFile(file), -1);
   }
   for (size_t i = 0; i < corpus.size(); ++i) execute(corpus[i], -1);

@@ -194,6 +194,36 @@ TEST(Soak, NonFiniteOrNegativeEvidenceIsRejected) {
   EXPECT_EQ(after.uncertainty, before.uncertainty);
 }
 
+// Points far outside the map (±1e30) are skipped and a non-finite origin is refused, without
+// undefined behaviour: OctoMap's coordToKeyChecked casts coordinate / resolution to int, so the
+// core must test the extent first (visible under UBSan with -fsanitize=float-cast-overflow,
+// which clang's -fsanitize=undefined includes and GCC's does not).
+TEST(Soak, PointsFarOutsideTheMapAreSkipped) {
+  EvidentialOcTree tree(0.2, 2);
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  for (float far : {1e30f, -1e30f, 1e10f, 7000.f}) {
+    points.push_back(far, 0.f, 0.f);
+    points.push_back(1.f, far, 0.f);
+    points.push_back(1.f, 0.f, far);
+  }
+  points.push_back(2.f, 0.f, 0.f);  // one ordinary point
+  evidence.assign(points.size() * 2, 1.0f);
+  InsertStats stats;
+  ASSERT_NO_THROW(stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0, 0, 0)));
+  EXPECT_EQ(stats.points_skipped, points.size() - 1);
+  EXPECT_EQ(tree.query(octomap::point3d(1e30f, 0.f, 0.f)).label, -1);
+  EXPECT_EQ(tree.query(octomap::point3d(std::nanf(""), 0.f, 0.f)).label, -1);
+  for (float bad : {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                    1e30f}) {
+    octomap::Pointcloud one;
+    one.push_back(2.f, 0.f, 0.f);
+    EXPECT_THROW(tree.insertSemanticScan(one, {1.0f, 1.0f}, octomap::point3d(bad, 0.f, 0.f)),
+                 std::invalid_argument)
+        << "origin x = " << bad;
+  }
+}
+
 }  // namespace
 }  // namespace evidential_octomap
 
