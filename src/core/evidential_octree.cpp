@@ -149,6 +149,12 @@ VoxelOpinion EvidentialOcTree::opinion(const EvidentialOcTreeNode* node) const {
 }
 
 VoxelOpinion EvidentialOcTree::query(const octomap::point3d& point_W) const {
+  // OctoMap's coordToKeyChecked casts coordinate / resolution to int: undefined for NaN, inf
+  // and anything beyond the tree's extent, so those are answered here.
+  const double extent = resolution * tree_max_val;
+  for (unsigned i = 0; i < 3; ++i) {
+    if (!(std::fabs(point_W(i)) < extent)) return opinion(nullptr);
+  }
   octomap::OcTreeKey key;
   if (!coordToKeyChecked(point_W, key)) return opinion(nullptr);
   return query(key);
@@ -422,7 +428,11 @@ void EvidentialOcTree::merge(const EvidentialOcTree& other) {
     if (!src->hasSemantics()) return;
     float* into = payloadForUpdate(dst);
     const float* from = other.slot(src->payload_);
-    for (int c = 0; c < num_classes_; ++c) into[c] = (into[c] + from[c]) - prior;
+    // Saturating: payloads near FLT_MAX (only a crafted file holds them) must not become inf.
+    for (int c = 0; c < num_classes_; ++c) {
+      into[c] = static_cast<float>(std::min(double(into[c]) + from[c] - prior,
+                                            double(std::numeric_limits<float>::max())));
+    }
   };
   // Applies src (a leaf) to every leaf below dst; children dst lacks become copies of src.
   std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*, unsigned)> spread =
@@ -591,6 +601,19 @@ std::istream& EvidentialOcTree::readData(std::istream& s) {
     for (float& v : occupancy) {
       if (!readPod(s, v) || !std::isfinite(v)) throw FormatError("bad occupancy parameters");
     }
+    // Keys are 16 bit: the map spans resolution * 65536, which must be a finite float extent.
+    if (!std::isfinite(resolution) || !(resolution >= 1e-6 && resolution <= 1e6)) {
+      throw FormatError("resolution " + std::to_string(resolution) + " outside [1e-6, 1e6]");
+    }
+    // Bounds that keep the integrator finite and its kernel loop small: support radius <= 64
+    // cells, down-sampling cell >= resolution / 1000, finite sigma0 and max_range.
+    const double max_support = config.length_scale * config.beta *
+                               std::exp(1.0 + std::max(0.0, -config.gamma));
+    if (!std::isfinite(config.sigma0) || !(config.ds_multiplier <= 1000.0) ||
+        std::isnan(config.max_range) || !(max_support <= 64.0 * resolution)) {
+      throw FormatError("semantic parameters out of range (kernel support > 64 cells, "
+                        "ds_multiplier > 1000 or non-finite sigma0/max_range)");
+    }
     try {
       setConfig(config);
     } catch (const std::exception& e) {
@@ -634,8 +657,11 @@ bool EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned dept
   if (has_payload) {
     float* data = payloadForUpdate(node);
     if (!s.read(reinterpret_cast<char*>(data), sizeof(float) * num_classes_)) return false;
+    // Every writer keeps payloads at or above the rule's prior (dempster: L >= 0); anything
+    // else reads out as NaN or negative beliefs.
+    const float prior = rule_->prior();
     for (int c = 0; c < num_classes_; ++c) {
-      if (!std::isfinite(data[c])) return false;
+      if (!std::isfinite(data[c]) || data[c] < prior) return false;
     }
   }
   for (unsigned i = 0; i < 8; ++i) {

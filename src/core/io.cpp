@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -46,29 +47,51 @@ void writeAtomically(const std::string& path, const std::function<bool(std::ostr
 }  // namespace
 
 void saveMap(const EvidentialOcTree& tree, const std::string& path) {
-  writeAtomically(path, [&](std::ostream& s) { return tree.write(s) && s.good(); });
+  writeAtomically(path, [&](std::ostream& s) {
+    s << std::setprecision(17);  // AbstractOcTree::write prints `res` with the stream's precision
+    return tree.write(s) && s.good();
+  });
 }
 
 void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path) {
   writeAtomically(path, [&](std::ostream& s) { return tree.writeBinaryConst(s) && s.good(); });
 }
 
+namespace {
+// OctoMap's own .ot header parser (protected in AbstractOcTree, reached through a subclass).
+struct OtHeader : octomap::AbstractOcTree {
+  static bool read(std::istream& s, std::string& id, unsigned& size, double& res) {
+    std::string line;
+    std::getline(s, line);
+    if (line.compare(0, fileHeader.length(), fileHeader) != 0) return false;
+    return readHeader(s, id, size, res);
+  }
+};
+}  // namespace
+
 std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open " + path + ": " + std::strerror(errno));
-  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(in));
-  if (!any) {
+  // The header is checked before any data is read: data of other tree types never reaches
+  // OctoMap's readers (which trust their input: no depth limit), and our data is read even when
+  // `size` is 0, because an empty map still carries its semantic header (C, names, rule).
+  std::string id;
+  unsigned size = 0;
+  double res = 0.0;
+  if (!OtHeader::read(in, id, size, res)) {
     throw std::runtime_error(path + " is not a readable OctoMap .ot file");
   }
-  auto* tree = dynamic_cast<EvidentialOcTree*>(any.get());
-  if (!tree) {
-    throw std::runtime_error(path + " holds a " + any->getTreeType() +
-                             ", not an EvidentialOcTree");
+  if (id != "EvidentialOcTree") {
+    throw std::runtime_error(path + " holds a " + id + ", not an EvidentialOcTree");
   }
+  if (!std::isfinite(res) || !(res > 0.0)) {
+    throw std::runtime_error(path + ": resolution " + std::to_string(res) + " is not > 0");
+  }
+  auto tree = std::make_unique<EvidentialOcTree>(res);
+  tree->readData(in);
   if (!tree->readError().empty()) throw std::runtime_error(path + ": " + tree->readError());
   if (in.fail()) throw std::runtime_error(path + ": truncated or corrupt data");
-  any.release();
-  return std::unique_ptr<EvidentialOcTree>(tree);
+  return tree;
 }
 
 ClassTable::Rgb uncertaintyColor(double t) {

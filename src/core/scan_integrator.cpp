@@ -118,8 +118,14 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
     const std::string problem = checkEvidence(&evidence[i * num_classes], num_classes);
     if (!problem.empty()) throw std::invalid_argument("point " + std::to_string(i) + ": " + problem);
   }
+  // OctoMap's coordToKeyChecked casts coordinate / resolution to int, which is undefined for
+  // NaN, inf and anything beyond the map (points at 1e30): test the extent first.
+  const double extent = tree->getResolution() * 32768.0;  // 16-bit keys, tree_max_val
+  const auto inside = [extent](const octomap::point3d& p) {
+    return std::fabs(p.x()) < extent && std::fabs(p.y()) < extent && std::fabs(p.z()) < extent;
+  };
   octomap::OcTreeKey origin_key;
-  if (!tree->coordToKeyChecked(origin_W, origin_key)) {
+  if (!inside(origin_W) || !tree->coordToKeyChecked(origin_W, origin_key)) {
     throw std::invalid_argument("sensor origin is not finite or outside the map's range");
   }
 
@@ -134,8 +140,7 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   octomap::OcTreeKey key;
   for (size_t i = 0; i < n; ++i) {
     const octomap::point3d& p = points_W.getPoint(i);
-    if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z()) ||
-        !tree->coordToKeyChecked(p, key)) {
+    if (!inside(p) || !tree->coordToKeyChecked(p, key)) {
       ++stats.points_skipped;
       continue;
     }
