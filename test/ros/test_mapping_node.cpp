@@ -3,6 +3,7 @@
 // clouds or missing TF leave the node alive, the map unchanged and a clear log line.
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <memory>
@@ -22,6 +23,7 @@
 
 #include "evidential_octomap/ClearBbx.h"
 #include "evidential_octomap/EvidentialMap.h"
+#include "evidential_octomap/LoadMap.h"
 #include "evidential_octomap/QueryMap.h"
 #include "evidential_octomap/SaveMap.h"
 #include "evidential_octomap/evidential_octree.h"
@@ -333,6 +335,35 @@ TEST_F(MappingNodeTest, SaveMapWritesAnOtThatReadsBackAsEvidentialOcTree) {
   EXPECT_FALSE(bad.response.success);
   EXPECT_NE(bad.response.message.find("/nonexistent_dir/x.ot"), std::string::npos)
       << bad.response.message;
+}
+
+TEST_F(MappingNodeTest, LoadMapRestoresASavedMapAndRefusesBadFiles) {
+  insert(cloudOf(scene()));
+  const std::string path = "/tmp/evidential_octomap_rostest_load_" + std::to_string(getpid()) + ".ot";
+  eo::SaveMap save;
+  save.request.path = path;
+  ASSERT_TRUE(ros::service::call(kNode + "/save_map", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  callReset();
+  ASSERT_EQ(query({gp(5.05, 0.0, 0.75)}).labels[0], -1);
+
+  eo::LoadMap load;
+  load.request.path = path;
+  ASSERT_TRUE(ros::service::call(kNode + "/load_map", load));
+  EXPECT_TRUE(load.response.success) << load.response.message;
+  EXPECT_EQ(query({gp(5.05, 0.0, 0.75)}).labels[0], kBuilding);
+
+  // A file that is not a map: refused with its name, the loaded map stays.
+  const std::string junk = path + ".junk";
+  { std::ofstream(junk) << "not an octree"; }
+  eo::LoadMap bad;
+  bad.request.path = junk;
+  ASSERT_TRUE(ros::service::call(kNode + "/load_map", bad));
+  EXPECT_FALSE(bad.response.success);
+  EXPECT_NE(bad.response.message.find(junk), std::string::npos) << bad.response.message;
+  EXPECT_EQ(query({gp(5.05, 0.0, 0.75)}).labels[0], kBuilding);
+  std::remove(path.c_str());
+  std::remove(junk.c_str());
 }
 
 TEST_F(MappingNodeTest, EvidentialMapMessageHoldsTheSerialisedTree) {
