@@ -807,8 +807,9 @@ int main(int argc, char** argv) try {
          << same(s) << " |\n";
     }
     const Series& sem2 = find("semantic", r, 2, true);
-    md << "| " << rangeName(r) << " | semantic insert, 2 thr: ms_occupancy (OctoMap ray casting, "
-          "lazy) / ms_kernel / ms_update (leaves + updateInnerNodes) | "
+    md << "| " << rangeName(r) << " | semantic insert, 2 thr: InsertStats ms_occupancy (ray-key "
+          "casting) / ms_kernel / ms_update (one Morton-ordered pass: occupancy, payloads, inner "
+          "nodes) | "
        << fmt(sem2.medianOfScans(sem2.occupancy)) << " | " << fmt(sem2.medianOfScans(sem2.kernel))
        << " | " << fmt(sem2.medianOfScans(sem2.update)) << " | " << fmt(sem2.medianOfScans(sem2.total))
        << " | – |\n";
