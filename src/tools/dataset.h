@@ -43,6 +43,7 @@ class Dataset {
  public:
   enum class Layout { kSemanticKitti, kSingleScan };
 
+  // `classes` must outlive the Dataset (it is kept by pointer).
   // Throws std::runtime_error naming the path when the layout is not recognised or a
   // required file is missing or malformed.
   static Dataset open(const std::string& path, const ClassTable& classes);

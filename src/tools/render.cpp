@@ -19,6 +19,7 @@ namespace {
 
 const cv::Vec3b kBackground(255, 255, 255);
 const cv::Vec3b kNoSemantics(200, 200, 200);
+const cv::Vec3d kRight(60, 170, 40), kWrong(30, 30, 220), kUncovered(200, 140, 60);  // BGR
 constexpr int kLine = 20;
 constexpr int kPanel = 220;
 
@@ -126,8 +127,8 @@ TopDownGrid makeGrid(const EvidentialOcTree& tree, const std::vector<Query>* que
   return g;
 }
 
-cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
-                       const TopDownGrid& g, const std::vector<std::string>& caption) {
+cv::Mat semanticLayer(const EvidentialOcTree& tree, const ClassTable& classes,
+                      const TopDownGrid& g, std::set<int>* shown_out) {
   cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
   std::set<int> shown;
   const auto top = topLeaves(tree, g);
@@ -143,6 +144,14 @@ cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
         map.at<cv::Vec3b>(r, c) = kNoSemantics;
       }
     }
+  if (shown_out) *shown_out = shown;
+  return map;
+}
+
+cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
+                       const TopDownGrid& g, const std::vector<std::string>& caption) {
+  std::set<int> shown;
+  cv::Mat map = semanticLayer(tree, classes, g, &shown);
   drawScaleBar(map, g);
   cv::Mat panel;
   cv::Mat canvas = compose(map, caption, &panel);
@@ -152,8 +161,8 @@ cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
   return canvas;
 }
 
-cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& scale,
-                          const TopDownGrid& g, const std::vector<std::string>& caption) {
+cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const UncertaintyScale& scale,
+                         const TopDownGrid& g) {
   cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
   const auto top = topLeaves(tree, g);
   for (int r = 0; r < g.height; ++r)
@@ -166,6 +175,12 @@ cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& 
       }
       map.at<cv::Vec3b>(r, c) = bgr(uncertaintyColor(scale.apply(tree.opinion(t.node).uncertainty)));
     }
+  return map;
+}
+
+cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& scale,
+                          const TopDownGrid& g, const std::vector<std::string>& caption) {
+  cv::Mat map = uncertaintyLayer(tree, scale, g);
   drawScaleBar(map, g);
   cv::Mat panel;
   cv::Mat canvas = compose(map, caption, &panel);
@@ -192,8 +207,8 @@ cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& 
   return canvas;
 }
 
-cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& queries,
-                    const TopDownGrid& g, const std::vector<std::string>& caption) {
+cv::Mat errorLayer(const EvidentialOcTree& tree, const std::vector<Query>& queries,
+                   const TopDownGrid& g) {
   // Per pixel: counts of right / wrong / uncovered queries, drawn as a colour mix.
   std::vector<cv::Vec3i> counts(size_t(g.width) * g.height, cv::Vec3i(0, 0, 0));
   for (const Query& q : queries) {
@@ -207,7 +222,7 @@ cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& quer
     }
     ++counts[size_t(r) * g.width + c][kind];
   }
-  const cv::Vec3d colors[3] = {{60, 170, 40}, {30, 30, 220}, {200, 140, 60}};  // BGR
+  const cv::Vec3d colors[3] = {kRight, kWrong, kUncovered};
   cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
   for (int r = 0; r < g.height; ++r)
     for (int c = 0; c < g.width; ++c) {
@@ -220,12 +235,18 @@ cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& quer
                                           cv::saturate_cast<uchar>(mix[1]),
                                           cv::saturate_cast<uchar>(mix[2]));
     }
+  return map;
+}
+
+cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& queries,
+                    const TopDownGrid& g, const std::vector<std::string>& caption) {
+  cv::Mat map = errorLayer(tree, queries, g);
   drawScaleBar(map, g);
   cv::Mat panel;
   cv::Mat canvas = compose(map, caption, &panel);
-  legendEntry(panel, 0, cv::Vec3b(60, 170, 40), "right");
-  legendEntry(panel, 1, cv::Vec3b(30, 30, 220), "wrong / no label");
-  legendEntry(panel, 2, cv::Vec3b(200, 140, 60), "uncovered (free/unknown)");
+  legendEntry(panel, 0, cv::Vec3b(kRight), "right");
+  legendEntry(panel, 1, cv::Vec3b(kWrong), "wrong / no label");
+  legendEntry(panel, 2, cv::Vec3b(kUncovered), "uncovered (free/unknown)");
   cv::putText(panel, "colours mix per pixel", cv::Point(10, 80), cv::FONT_HERSHEY_SIMPLEX, 0.4,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return canvas;

@@ -3,6 +3,7 @@
 // Each column of the map shows its highest occupied leaf; north (+y) is up.
 #pragma once
 
+#include <set>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,16 @@ cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& 
                           const TopDownGrid& grid, const std::vector<std::string>& caption);
 cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& queries,
                     const TopDownGrid& grid, const std::vector<std::string>& caption);
+
+// The map layers alone (no caption, legend or scale bar), one pixel per grid cell, BGR; white
+// where nothing is occupied, grey for occupied voxels without evidence. Error layer: per pixel
+// the mix of right (green), wrong (red) and uncovered (blue) queries.
+cv::Mat semanticLayer(const EvidentialOcTree& tree, const ClassTable& classes,
+                      const TopDownGrid& grid, std::set<int>* classes_shown = nullptr);
+cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const UncertaintyScale& scale,
+                         const TopDownGrid& grid);
+cv::Mat errorLayer(const EvidentialOcTree& tree, const std::vector<Query>& queries,
+                   const TopDownGrid& grid);
 
 // Throws std::runtime_error naming the path when the PNG cannot be written.
 void writePng(const std::string& path, const cv::Mat& image);

@@ -1,0 +1,101 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "evidential_octomap/io.h"
+#include "render.h"
+#include "test_helpers.h"
+
+using namespace evidential_octomap;
+using namespace evidential_octomap::tools;
+
+namespace {
+cv::Vec3b bgr(const ClassTable::Rgb& c) { return cv::Vec3b(c[2], c[1], c[0]); }
+
+// C = 3 at 0.5 m: a (class 1) with c (class 2) stacked above it, b (class 2) beside, d occupied
+// without evidence. Payload (0, ln 3, 0) -> label 1, u = 1/3.
+struct Scene {
+  EvidentialOcTree tree{0.5, 3};
+  ClassTable classes;
+  octomap::point3d a{0.25f, 0.25f, 0.25f}, b{1.25f, 0.25f, 0.25f}, c{0.25f, 0.25f, 1.25f},
+      d{1.25f, 1.25f, 0.25f};
+  Scene() {
+    classes.dataset = "test";
+    classes.names = {"void", "one", "two"};
+    classes.colors = {{{0, 0, 0}}, {{10, 20, 30}}, {{200, 100, 50}}};
+    classes.ignore_class = 0;
+    const float l3 = std::log(3.0f);
+    set(a, {0.0f, l3, 0.0f});
+    set(b, {0.0f, 0.0f, l3});
+    set(c, {0.0f, 0.0f, l3});
+    set(d, {});
+  }
+  void set(const octomap::point3d& p, const std::vector<float>& payload) {
+    const auto key = tree.coordToKey(p);
+    tree.updateNode(key, true);
+    if (payload.empty()) return;
+    float* slot = tree.payloadForUpdate(tree.leafForUpdate(key, false));
+    for (size_t i = 0; i < payload.size(); ++i) slot[i] = payload[i];
+  }
+};
+}  // namespace
+
+TEST(TopDownGrid, CoversTheOccupiedLeavesAtTheMapResolution) {
+  Scene s;
+  const TopDownGrid g = makeGrid(s.tree, nullptr);
+  EXPECT_DOUBLE_EQ(g.pixel, 0.5);
+  EXPECT_EQ(g.width, 4);
+  EXPECT_EQ(g.height, 4);
+  int col, row;
+  ASSERT_TRUE(g.toPixel(0.25, 0.25, &col, &row));
+  EXPECT_EQ(col, 0);
+  EXPECT_EQ(row, 3);  // north up: the lowest y is the last row
+  EXPECT_FALSE(g.toPixel(-3.0, 0.25, &col, &row));
+}
+
+TEST(SemanticLayer, ShowsTheHighestOccupiedLeafInClassColours) {
+  Scene s;
+  const TopDownGrid g = makeGrid(s.tree, nullptr);
+  std::set<int> shown;
+  const cv::Mat m = semanticLayer(s.tree, s.classes, g, &shown);
+  EXPECT_EQ(m.at<cv::Vec3b>(3, 0), bgr(s.classes.colors[2]));  // c (class 2) hides a (class 1)
+  EXPECT_EQ(m.at<cv::Vec3b>(3, 2), bgr(s.classes.colors[2]));  // b
+  EXPECT_EQ(m.at<cv::Vec3b>(1, 2), cv::Vec3b(200, 200, 200));  // d: occupied, no evidence
+  EXPECT_EQ(m.at<cv::Vec3b>(3, 1), cv::Vec3b(255, 255, 255));  // nothing there
+  EXPECT_EQ(shown, (std::set<int>{2}));
+}
+
+TEST(UncertaintyLayer, UsesTheSharedColourMap) {
+  Scene s;
+  const TopDownGrid g = makeGrid(s.tree, nullptr);
+  const cv::Mat m = uncertaintyLayer(s.tree, uncertaintyScale(s.tree), g);
+  EXPECT_EQ(m.at<cv::Vec3b>(3, 2), bgr(uncertaintyColor(1.0 / 3.0)));
+}
+
+TEST(ErrorLayer, RightWrongAndUncoveredQueriesHaveTheirColours) {
+  Scene s;
+  const TopDownGrid g = makeGrid(s.tree, nullptr);
+  const std::vector<Query> q{{s.a, 1, 1},                               // right
+                             {s.b, 1, 1},                               // wrong (b says 2)
+                             {octomap::point3d(0.25f, 1.25f, 0.25f), 1, 1}};  // unknown
+  const cv::Mat m = errorLayer(s.tree, q, g);
+  EXPECT_EQ(m.at<cv::Vec3b>(3, 0), cv::Vec3b(60, 170, 40));
+  EXPECT_EQ(m.at<cv::Vec3b>(3, 2), cv::Vec3b(30, 30, 220));
+  EXPECT_EQ(m.at<cv::Vec3b>(1, 0), cv::Vec3b(200, 140, 60));
+}
+
+TEST(Render, FullImageHasCaptionAndPanelAndWritesAPng) {
+  Scene s;
+  const TopDownGrid g = makeGrid(s.tree, nullptr);
+  const cv::Mat img = renderSemantic(s.tree, s.classes, g, {"line one", "line two"});
+  EXPECT_GT(img.cols, g.width + 100);   // legend panel on the right
+  EXPECT_GT(img.rows, g.height + 40);   // two caption lines on top
+  const std::string path = tools_test::freshDir("render") + "/semantic.png";
+  writePng(path, img);
+  const cv::Mat back = cv::imread(path);
+  ASSERT_FALSE(back.empty());
+  EXPECT_EQ(back.size(), img.size());
+  EXPECT_THROW(writePng("/nonexistent/dir/x.png", img), std::runtime_error);
+}
