@@ -34,6 +34,12 @@ void runMap(const MapOptions& o) {
   finishEvidenceOptions(o.evidence_name, &ev);
   const ClassTable classes = ClassTable::load(o.classes);
   const Dataset dataset = Dataset::open(o.data, classes);
+  if (derivedFromHardLabels(ev.source) && !dataset.hasPredictions() && !o.synthetic) {
+    throw std::runtime_error(o.data + ": no predictions/ to derive '" + o.evidence_name +
+                             "' evidence from; pass --synthetic-predictions (GT with the "
+                             "documented noise model) or use --evidence file with evidence/ "
+                             "or alpha/ files");
+  }
   std::vector<Scan> scans = loadScans(dataset, o.scans, !o.quiet);
   std::string predictions_note;
   if (o.synthetic) {

@@ -18,7 +18,7 @@ namespace evidential_octomap::tools {
 namespace {
 
 const cv::Vec3b kBackground(255, 255, 255);
-const cv::Vec3b kNoSemantics(200, 200, 200);
+const cv::Vec3b kNoSemantics(228, 228, 228);  // lighter than any grey class colour
 const cv::Vec3d kRight(60, 170, 40), kWrong(30, 30, 220), kUncovered(200, 140, 60);  // BGR
 constexpr int kLine = 20;
 constexpr int kPanel = 220;

@@ -36,7 +36,7 @@ cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& quer
                     const TopDownGrid& grid, const std::vector<std::string>& caption);
 
 // The map layers alone (no caption, legend or scale bar), one pixel per grid cell, BGR; white
-// where nothing is occupied, grey for occupied voxels without evidence. Error layer: per pixel
+// where nothing is occupied, light grey (228) for occupied voxels without evidence. Error layer: per pixel
 // the mix of right (green), wrong (red) and uncovered (blue) queries.
 cv::Mat semanticLayer(const EvidentialOcTree& tree, const ClassTable& classes,
                       const TopDownGrid& grid, std::set<int>* classes_shown = nullptr);

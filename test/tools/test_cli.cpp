@@ -252,3 +252,24 @@ TEST(CliErrors, EverySubcommandHasHelp) {
     EXPECT_NE(r.output.find("Usage:"), std::string::npos) << c;
   }
 }
+
+TEST(CliRellis, WithoutPredictionsAsksForSyntheticOnes) {
+  const Result r = run("map --quiet --data " + rellisDir() + " --classes " + rellisClasses() +
+                       " --out " + freshDir("cli_rellis_none"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.output.find("--synthetic-predictions"), std::string::npos) << r.output;
+}
+
+TEST(CliRellis, SyntheticPredictionsAreLabelledInTheOutputs) {
+  const std::string out = freshDir("cli_rellis");
+  const Result r = run("map --quiet --no-render --synthetic-predictions --data " + rellisDir() +
+                       " --classes " + rellisClasses() + " --out " + out);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto j = readJson(out + "/metrics.json");
+  EXPECT_NE(std::string(j["predictions"]).find("synthetic"), std::string::npos);
+  EXPECT_EQ(j["class_table"], "rellis3d");
+  EXPECT_EQ(size_t(j["map"]["queries"]), 62788u);  // 77,708 valid points minus 14,920 void
+  const double input_acc = j["input_predictions"]["acc"];
+  EXPECT_GT(input_acc, 0.75);  // about 1 - point rate - region rate
+  EXPECT_LT(input_acc, 0.95);
+}
