@@ -1,12 +1,14 @@
 // Writes the seed corpus of the fuzz targets: real .ot files made by the library itself (so the
 // seeds follow the file format as it changes), foreign OctoMap trees, and the class tables.
 //   make_seeds <out_dir> <source_dir>
-// out_dir/ot/*.ot and out_dir/class_table/*.yaml are created. source_dir is the repository root
+// out_dir/ot/*.ot, out_dir/class_table/*.yaml and out_dir/pointcloud2/*.bin are created. source_dir is the repository root
 // (data/semantickitti_08_first10 and config/ are read from it; a missing dataset is skipped).
 #include <sys/stat.h>
 
 #include <cstdint>
+#include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <random>
@@ -180,6 +182,38 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     std::cerr << "make_seeds: " << e.what() << "\n";
     return 1;
+  }
+
+  // PointCloud2 messages in fuzz_pointcloud2.cpp's encoding: options, fields, layout, data.
+  makeDir(out + "/pointcloud2");
+  {
+    auto seed = [&](const std::string& name, std::vector<uint8_t> head, int points, int step,
+                    const std::vector<float>& per_point) {
+      std::vector<uint8_t> bytes = head;
+      bytes.insert(bytes.end(), {1, uint8_t(points), 0, uint8_t(step), uint8_t(points * step),
+                                 uint8_t((points * step) >> 8)});
+      for (int i = 0; i < points; ++i) {
+        std::vector<uint8_t> point(step, 0);
+        std::memcpy(point.data(), per_point.data(),
+                    std::min(per_point.size() * sizeof(float), size_t(step)));
+        point[0] ^= uint8_t(i);  // points differ a little
+        bytes.insert(bytes.end(), point.begin(), point.end());
+      }
+      std::ofstream(out + "/pointcloud2/" + name, std::ios::binary)
+          .write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+    };
+    // name indices: x 0, y 1, z 2, evidence 3, evidence_0.. 4-6, alpha 7, alpha_0/1 8/9, label 10
+    // datatypes: uint16 4, float32 7, float64 8
+    seed("evidence_c3.bin", {2, 0, 0, 4, 0, 0, 7, 1, 1, 4, 7, 1, 2, 8, 7, 1, 3, 12, 7, 3}, 4, 24,
+         {1.5f, 0.5f, 0.2f, 5.0f, 0.1f, 0.0f});
+    seed("channels_c3.bin", {2, 1, 0, 6, 0, 0, 7, 1, 1, 4, 7, 1, 2, 8, 7, 1, 4, 12, 7, 1, 5, 16,
+                             7, 1, 6, 20, 7, 1}, 3, 24, {2.0f, 1.0f, 0.0f, 0.0f, 9.0f, 1.0f});
+    seed("alpha_c2.bin", {1, 2, 0, 5, 0, 0, 7, 1, 1, 4, 7, 1, 2, 8, 7, 1, 8, 12, 7, 1, 9, 16, 7, 1},
+         3, 20, {3.0f, -1.0f, 0.5f, 4.0f, 1.0f});
+    seed("label_c4_bigendian.bin", {3, 3, 1, 4, 0, 0, 7, 1, 1, 4, 7, 1, 2, 8, 7, 1, 10, 12, 4, 1},
+         4, 16, {0.0f, 0.0f, 0.0f, 0.0f});
+    seed("double_xyz_c1.bin", {0, 0, 2, 4, 0, 0, 8, 1, 1, 8, 8, 1, 2, 16, 8, 1, 3, 24, 7, 1}, 2,
+         28, {0.0f, 1.875f, 0.0f, 0.0f, 0.0f, 0.0f, 3.0f});
   }
 
   // Class tables: the shipped ones and a minimal one.
