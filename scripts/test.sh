@@ -136,6 +136,8 @@ else
   note "catkin: workspace ${ws}"
   mkdir -p "${ws}/src"
   ln -sfn "${root}" "${ws}/src/evidential_octomap"
+  # A workspace that holds this repository must not find a second copy through build/.
+  touch build/CATKIN_IGNORE build/COLCON_IGNORE
   # ROS writes logs and test results under ROS_HOME; keep them in build/, away from ~/.ros.
   # rostest starts its own master on a free port, so a running roscore is not disturbed.
   export ROS_HOME="${root}/build/ros_home"
