@@ -490,6 +490,33 @@ TEST(KernelLeafCreation, OccupancyEqualsPlainOcTreeOverSeveralScans) {
   }
 }
 
+TEST(KernelLeafCreation, OccupancyEqualsPlainOcTreeWithoutDiscretizationAndWithMaxRange) {
+  SyntheticScene scene;
+  for (double max_range : {-1.0, 6.0}) {
+    octomap::OcTree plain(0.2);
+    SemanticConfig config;
+    config.discretize = false;
+    config.max_range = max_range;
+    config.kernel_creates_leaves = false;
+    EvidentialOcTree tree(0.2, scene.num_classes, config);
+    for (int i = 0; i < 2; ++i) {
+      const SyntheticScan scan = scene.scan(octomap::point3d(0.05f + 0.8f * i, 0.1f, 1.7f), 60 + i);
+      plain.insertPointCloud(scan.points_W, scan.origin_W, max_range, false, false);
+      tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+    }
+    const auto expected = fullDepthLeafKeys(plain);
+    const auto got = fullDepthLeafKeys(tree);
+    EXPECT_TRUE(got == expected) << "max_range " << max_range << ": " << got.size() << " leaves vs "
+                                 << expected.size();
+    size_t mismatches = 0;
+    for (const auto& key : expected) {
+      const EvidentialOcTreeNode* node = tree.search(keyOf(key));
+      if (!node || node->getLogOdds() != plain.search(keyOf(key))->getLogOdds()) ++mismatches;
+    }
+    EXPECT_EQ(mismatches, 0u) << "max_range " << max_range;
+  }
+}
+
 TEST(KernelLeafCreation, VoxelsUpdatedCountsTheSemanticLeaves) {
   SyntheticScene scene;
   const SyntheticScan scan = scene.defaultScan();

@@ -114,8 +114,9 @@ TEST(DempsterRule, VacuousMassIsIdentity) {
     ASSERT_EQ(vacuous.uncertainty, 1.0);
     for (int t = 0; t < kTrials; ++t) {
       const Opinion a = rnd.opinion(num_classes);
-      EXPECT_LE(maxDiff(dempsterCombine(a, vacuous), a), 1e-15);
-      EXPECT_LE(maxDiff(dempsterCombine(vacuous, a), a), 1e-15);
+      // Exact in real arithmetic; allow rounding over a sum of C terms (C * 2^-53 < 1e-13).
+      EXPECT_LE(maxDiff(dempsterCombine(a, vacuous), a), 1e-13);
+      EXPECT_LE(maxDiff(dempsterCombine(vacuous, a), a), 1e-13);
     }
   }
 }
