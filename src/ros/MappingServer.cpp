@@ -9,9 +9,8 @@
 #include <geometry_msgs/TransformStamped.h>
 
 #include "camera_projection.h"
+#include "map_editing.h"
 #include "conversions.h"
-#include "evidential_octomap/EvidentialMap.h"
-#include "evidential_octomap/OccupancyMap.h"
 #include "evidential_octomap/io.h"
 #include "visualization.h"
 
@@ -34,62 +33,6 @@ const char* tfReason(tf2_ros::filter_failure_reasons::FilterFailureReason reason
     case tf2_ros::filter_failure_reasons::EmptyFrameID: return "empty header.frame_id";
     default: return "transform unavailable (queue overflow or timeout)";
   }
-}
-
-// Clears [min, max] as octomap_server's clear_bbx does: every leaf inside becomes free (log-odds
-// at the clamping minimum) and loses its semantic evidence. Coarse leaves that straddle the
-// border are split down to full depth first, so nothing outside the box changes. (Leaves are
-// not deleted: OctoMap 1.9's deleteNode frees an emptied parent without its child array and
-// trips an assertion in Debian's liboctomap.) Returns the number of leaves cleared.
-uint32_t clearBox(EvidentialOcTree* tree, const octomap::point3d& min, const octomap::point3d& max) {
-  if (tree->getRoot() == nullptr) return 0;
-  const double lim = tree->getResolution() * 32767.0;
-  auto clampPoint = [&](octomap::point3d p) {
-    for (int i = 0; i < 3; ++i) p(i) = std::max<float>(-lim, std::min<float>(lim, p(i)));
-    return p;
-  };
-  octomap::OcTreeKey kmin, kmax;
-  if (!tree->coordToKeyChecked(clampPoint(min), kmin) || !tree->coordToKeyChecked(clampPoint(max), kmax))
-    return 0;
-  const unsigned max_depth = tree->getTreeDepth();
-  std::vector<std::pair<octomap::OcTreeKey, unsigned>> targets;
-  for (auto it = tree->begin_leafs_bbx(kmin, kmax), end = tree->end_leafs_bbx(); it != end; ++it) {
-    const unsigned depth = it.getDepth();
-    const octomap::OcTreeKey k = it.getKey();
-    if (depth == max_depth) {
-      targets.emplace_back(k, depth);
-      continue;
-    }
-    // A coarse leaf spans keys [k - half, k + half - 1] on each axis.
-    const unsigned half = 1u << (max_depth - depth - 1);
-    unsigned lo[3], hi[3];
-    bool inside = true;
-    for (int i = 0; i < 3; ++i) {
-      lo[i] = std::max<unsigned>(k[i] - half, kmin[i]);
-      hi[i] = std::min<unsigned>(k[i] + half - 1, kmax[i]);
-      inside = inside && lo[i] == unsigned(k[i] - half) && hi[i] == unsigned(k[i] + half - 1);
-    }
-    if (inside) {
-      targets.emplace_back(k, depth);
-      continue;
-    }
-    for (unsigned x = lo[0]; x <= hi[0]; ++x)
-      for (unsigned y = lo[1]; y <= hi[1]; ++y)
-        for (unsigned z = lo[2]; z <= hi[2]; ++z)
-          targets.emplace_back(octomap::OcTreeKey(x, y, z), max_depth);
-  }
-  uint32_t cleared = 0;
-  for (const auto& target : targets) {
-    EvidentialOcTreeNode* node = target.second == max_depth
-                                     ? tree->leafForUpdate(target.first, false)
-                                     : tree->search(target.first, target.second);
-    if (!node) continue;
-    node->setLogOdds(tree->getClampingThresMinLog());
-    tree->clearPayload(node);
-    ++cleared;
-  }
-  tree->updateInnerNodes();
-  return cleared;
 }
 
 // Warns about a dropped cloud: a new kind of problem at once, repeats of one kind at most every
@@ -149,23 +92,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<MappingConfig>>(reconfigure_mutex_, pnh_);
   MappingConfig rc;
-  rc.length_scale = semantic_config_.length_scale;
-  rc.sigma0 = semantic_config_.sigma0;
-  rc.beta = semantic_config_.beta;
-  rc.gamma = semantic_config_.gamma;
-  rc.drop_percent = semantic_config_.drop_percent;
-  rc.adaptive_length = semantic_config_.adaptive_length;
-  rc.uncertainty_threshold = semantic_config_.uncertainty_threshold;
-  rc.reference_compat = semantic_config_.reference_compat;
-  rc.ds_multiplier = semantic_config_.ds_multiplier;
-  rc.kernel_creates_leaves = semantic_config_.kernel_creates_leaves;
-  rc.sensor_model_max_range = semantic_config_.max_range;
-  rc.sensor_model_hit = tree_->getProbHit();
-  rc.sensor_model_miss = tree_->getProbMiss();
-  rc.sensor_model_min = tree_->getClampingThresMin();
-  rc.sensor_model_max = tree_->getClampingThresMax();
-  rc.publish_rate = config_.publish_rate;
-  rc.label_evidence = config_.label_evidence;
+  toReconfigure(semantic_config_, *tree_, config_, &rc);
   reconfigure_server_->updateConfig(rc);
   reconfigure_server_->setCallback(
       boost::bind(&MappingServer::reconfigure, this, boost::placeholders::_1, boost::placeholders::_2));
@@ -325,11 +252,12 @@ std::string MappingServer::paintFromCamera(const sensor_msgs::PointCloud2& cloud
 
 void MappingServer::markChanged() { dirty_views_ = dirty_map_ = dirty_occupancy_ = true; }
 
+// At publish_rate; with publish_rate <= 0 (publish after every scan) a 1 Hz timer still serves
+// outputs that had no subscriber when their scan arrived.
 void MappingServer::restartPublishTimer() {
   publish_timer_.stop();
-  if (config_.publish_rate > 0.0)
-    publish_timer_ = nh_.createTimer(ros::Duration(1.0 / config_.publish_rate),
-                                     &MappingServer::publishTimer, this);
+  const double period = config_.publish_rate > 0.0 ? 1.0 / config_.publish_rate : 1.0;
+  publish_timer_ = nh_.createTimer(ros::Duration(period), &MappingServer::publishTimer, this);
 }
 
 void MappingServer::publishTimer(const ros::TimerEvent&) {
@@ -381,30 +309,15 @@ void MappingServer::publishViews(bool force) {
     ms_views = msSince(t0);
   }
   if (map) {
-    EvidentialMap msg;
-    msg.header.frame_id = config_.frame_id;
+    EvidentialMap msg = toEvidentialMap(*tree_, config_.frame_id);
     msg.header.stamp = stamp;
-    msg.resolution = tree_->getResolution();
-    msg.num_classes = static_cast<uint16_t>(tree_->numClasses());
-    msg.class_names = tree_->classNames();
-    msg.fusion_rule = tree_->rule().name();
-    std::stringstream s;
-    tree_->write(s);
-    const std::string bytes = s.str();
-    msg.data.assign(bytes.begin(), bytes.end());
     map_pub_.publish(msg);
     dirty_map_ = false;
     ms_map = msSince(t0) - ms_views;
   }
   if (occupancy) {
-    OccupancyMap msg;
-    msg.header.frame_id = config_.frame_id;
+    OccupancyMap msg = toOccupancyMap(*tree_, config_.frame_id);
     msg.header.stamp = stamp;
-    msg.resolution = tree_->getResolution();
-    std::stringstream s;
-    tree_->writeBinaryConst(s);
-    const std::string bytes = s.str();
-    msg.data.assign(bytes.begin(), bytes.end());
     occupancy_pub_.publish(msg);
     dirty_occupancy_ = false;
   }
@@ -512,33 +425,18 @@ bool MappingServer::query(QueryMap::Request& req, QueryMap::Response& res) {
 
 void MappingServer::reconfigure(MappingConfig& rc, uint32_t) {
   std::lock_guard<std::mutex> lock(mutex_);
-  SemanticConfig c = semantic_config_;
-  c.length_scale = rc.length_scale;
-  c.sigma0 = rc.sigma0;
-  c.beta = rc.beta;
-  c.gamma = rc.gamma;
-  c.drop_percent = rc.drop_percent;
-  c.adaptive_length = rc.adaptive_length;
-  c.uncertainty_threshold = rc.uncertainty_threshold;
-  c.reference_compat = rc.reference_compat;
-  c.ds_multiplier = rc.ds_multiplier;
-  c.kernel_creates_leaves = rc.kernel_creates_leaves;
-  c.max_range = rc.sensor_model_max_range;
+  SemanticConfig semantic = semantic_config_;
+  NodeConfig node = config_;
+  fromReconfigure(rc, &semantic, &node, tree_.get());
   try {
-    tree_->setConfig(c);
-    semantic_config_ = c;
+    tree_->setConfig(semantic);
+    semantic_config_ = semantic;
   } catch (const std::exception& e) {
     ROS_ERROR("reconfigure: %s", e.what());
   }
-  if (rc.sensor_model_hit > 0.5) tree_->setProbHit(rc.sensor_model_hit);
-  if (rc.sensor_model_miss < 0.5) tree_->setProbMiss(rc.sensor_model_miss);
-  if (rc.sensor_model_min < rc.sensor_model_max) {
-    tree_->setClampingThresMin(rc.sensor_model_min);
-    tree_->setClampingThresMax(rc.sensor_model_max);
-  }
-  config_.label_evidence = rc.label_evidence;
-  if (rc.publish_rate != config_.publish_rate) {
-    config_.publish_rate = rc.publish_rate;
+  config_.label_evidence = node.label_evidence;
+  if (node.publish_rate != config_.publish_rate) {
+    config_.publish_rate = node.publish_rate;
     restartPublishTimer();
   }
 }

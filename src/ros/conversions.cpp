@@ -319,6 +319,31 @@ std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& b
   return voxels;
 }
 
+EvidentialMap toEvidentialMap(const EvidentialOcTree& tree, const std::string& frame_id) {
+  EvidentialMap msg;
+  msg.header.frame_id = frame_id;
+  msg.resolution = tree.getResolution();
+  msg.num_classes = static_cast<uint16_t>(tree.numClasses());
+  msg.class_names = tree.classNames();
+  msg.fusion_rule = tree.rule().name();
+  std::stringstream s;
+  tree.write(s);
+  const std::string bytes = s.str();
+  msg.data.assign(bytes.begin(), bytes.end());
+  return msg;
+}
+
+OccupancyMap toOccupancyMap(const EvidentialOcTree& tree, const std::string& frame_id) {
+  OccupancyMap msg;
+  msg.header.frame_id = frame_id;
+  msg.resolution = tree.getResolution();
+  std::stringstream s;
+  tree.writeBinaryConst(s);
+  const std::string bytes = s.str();
+  msg.data.assign(bytes.begin(), bytes.end());
+  return msg;
+}
+
 float packRgb(const ClassTable::Rgb& rgb) {
   const uint32_t packed = (uint32_t(rgb[0]) << 16) | (uint32_t(rgb[1]) << 8) | uint32_t(rgb[2]);
   float f;

@@ -9,6 +9,8 @@
 #include <octomap/Pointcloud.h>
 #include <sensor_msgs/PointCloud2.h>
 
+#include "evidential_octomap/EvidentialMap.h"
+#include "evidential_octomap/OccupancyMap.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 
@@ -71,6 +73,11 @@ std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& b
 // rgb (float32-packed class colour, grey when unlabelled).
 sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
                                        const ClassTable& classes, const std::string& frame_id);
+
+// The whole tree as our EvidentialMap message (.ot bytes, C, class names, rule); stamp unset.
+EvidentialMap toEvidentialMap(const EvidentialOcTree& tree, const std::string& frame_id);
+// Occupancy only, as .bt bytes any OctoMap tool reads; stamp unset.
+OccupancyMap toOccupancyMap(const EvidentialOcTree& tree, const std::string& frame_id);
 
 // Packs a colour as PCL/rviz expect in a float32 `rgb` field.
 float packRgb(const ClassTable::Rgb& rgb);

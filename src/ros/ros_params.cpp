@@ -72,4 +72,48 @@ void readOccupancyParams(const ros::NodeHandle& nh, EvidentialOcTree* tree) {
   tree->setClampingThresMax(max);
 }
 
+void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
+                   const NodeConfig& node, MappingConfig* rc) {
+  rc->length_scale = semantic.length_scale;
+  rc->sigma0 = semantic.sigma0;
+  rc->beta = semantic.beta;
+  rc->gamma = semantic.gamma;
+  rc->drop_percent = semantic.drop_percent;
+  rc->adaptive_length = semantic.adaptive_length;
+  rc->uncertainty_threshold = semantic.uncertainty_threshold;
+  rc->reference_compat = semantic.reference_compat;
+  rc->ds_multiplier = semantic.ds_multiplier;
+  rc->kernel_creates_leaves = semantic.kernel_creates_leaves;
+  rc->sensor_model_max_range = semantic.max_range;
+  rc->sensor_model_hit = tree.getProbHit();
+  rc->sensor_model_miss = tree.getProbMiss();
+  rc->sensor_model_min = tree.getClampingThresMin();
+  rc->sensor_model_max = tree.getClampingThresMax();
+  rc->publish_rate = node.publish_rate;
+  rc->label_evidence = node.label_evidence;
+}
+
+void fromReconfigure(const MappingConfig& rc, SemanticConfig* semantic, NodeConfig* node,
+                     EvidentialOcTree* tree) {
+  semantic->length_scale = rc.length_scale;
+  semantic->sigma0 = rc.sigma0;
+  semantic->beta = rc.beta;
+  semantic->gamma = rc.gamma;
+  semantic->drop_percent = rc.drop_percent;
+  semantic->adaptive_length = rc.adaptive_length;
+  semantic->uncertainty_threshold = rc.uncertainty_threshold;
+  semantic->reference_compat = rc.reference_compat;
+  semantic->ds_multiplier = rc.ds_multiplier;
+  semantic->kernel_creates_leaves = rc.kernel_creates_leaves;
+  semantic->max_range = rc.sensor_model_max_range;
+  if (rc.sensor_model_hit > 0.5) tree->setProbHit(rc.sensor_model_hit);
+  if (rc.sensor_model_miss < 0.5) tree->setProbMiss(rc.sensor_model_miss);
+  if (rc.sensor_model_min < rc.sensor_model_max) {
+    tree->setClampingThresMin(rc.sensor_model_min);
+    tree->setClampingThresMax(rc.sensor_model_max);
+  }
+  node->publish_rate = rc.publish_rate;
+  node->label_evidence = rc.label_evidence;
+}
+
 }  // namespace evidential_octomap

@@ -10,6 +10,7 @@
 #include <ros/node_handle.h>
 
 #include "conversions.h"
+#include "evidential_octomap/MappingConfig.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/semantic_config.h"
 #include "visualization.h"
@@ -44,6 +45,14 @@ void readSemanticConfig(const ros::NodeHandle& nh, SemanticConfig* config);
 
 // Reads sensor_model/{hit,miss,min,max} over the tree's current values and sets them.
 void readOccupancyParams(const ros::NodeHandle& nh, EvidentialOcTree* tree);
+
+// dynamic_reconfigure (src/ros/cfg/Mapping.cfg): the values in use -> the server's config, and
+// a config from the server -> semantic config, node config and the tree's sensor model (invalid
+// sensor models are ignored).
+void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
+                   const NodeConfig& node, MappingConfig* rc);
+void fromReconfigure(const MappingConfig& rc, SemanticConfig* semantic, NodeConfig* node,
+                     EvidentialOcTree* tree);
 
 // The package's default class table (config/classes_semantickitti.yaml).
 std::string defaultClassTablePath();

@@ -2,10 +2,14 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <memory>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
 
 #include "conversions.h"
 #include "evidential_octomap/io.h"
@@ -392,6 +396,33 @@ TEST(OccupiedVoxels, BoxLimitsTheVoxels) {
   ASSERT_FALSE(some.empty());
   EXPECT_LT(some.size(), all.size());
   for (const auto& v : some) EXPECT_GE(v.center.y(), 0.f - 0.2f);
+}
+
+TEST(MapMessages, EvidentialMapReadsBackAsTheSameTree) {
+  auto tree = wallMap();
+  const EvidentialMap msg = toEvidentialMap(*tree, "map");
+  EXPECT_EQ(msg.header.frame_id, "map");
+  EXPECT_EQ(msg.num_classes, kC);
+  EXPECT_EQ(msg.fusion_rule, "dempster");
+  EXPECT_DOUBLE_EQ(msg.resolution, 0.2);
+  std::stringstream s(std::string(msg.data.begin(), msg.data.end()));
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(s));
+  auto* back = dynamic_cast<EvidentialOcTree*>(read.get());
+  ASSERT_NE(back, nullptr);
+  EXPECT_EQ(back->getNumLeafNodes(), tree->getNumLeafNodes());
+  EXPECT_EQ(back->query(octomap::point3d(3.05f, 0.f, 0.f)).label, 2);
+}
+
+TEST(MapMessages, OccupancyMapIsAPlainOcTreeBinary) {
+  auto tree = wallMap();
+  const OccupancyMap msg = toOccupancyMap(*tree, "map");
+  std::stringstream s(std::string(msg.data.begin(), msg.data.end()));
+  octomap::OcTree plain(0.1);
+  ASSERT_TRUE(plain.readBinary(s));
+  EXPECT_DOUBLE_EQ(plain.getResolution(), 0.2);
+  const auto* node = plain.search(3.05, 0.0, 0.0);
+  ASSERT_NE(node, nullptr);
+  EXPECT_TRUE(plain.isNodeOccupied(node));
 }
 
 TEST(ToPointCloud2, FieldsHoldLabelUncertaintyAndClassColour) {

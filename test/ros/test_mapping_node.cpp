@@ -127,7 +127,24 @@ class MappingNodeTest : public ::testing::Test {
     tf_.sendTransform(t);
     ASSERT_TRUE(ros::service::waitForService(kNode + "/query", ros::Duration(60)));
     ASSERT_TRUE(waitFor([&] { return cloud_pub_.getNumSubscribers() > 0; }));
+    ASSERT_TRUE(waitFor([&] {
+      return semantic_sub_.getNumPublishers() > 0 && uncertainty_sub_.getNumPublishers() > 0 &&
+             cloud_sub_.getNumPublishers() > 0;
+    }));
     callReset();
+    // Views sent before the reset may still be queued: wait until the empty ones are the latest,
+    // so every view seen later comes from this test's scans.
+    ASSERT_TRUE(waitFor([&] {
+      return semantic_ && uncertainty_ && cloud_ && cubes(semantic_) == 0 &&
+             cubes(uncertainty_) == 0 && cloud_->width == 0;
+    }));
+  }
+
+  static size_t cubes(const visualization_msgs::MarkerArrayConstPtr& a) {
+    size_t n = 0;
+    if (a)
+      for (const auto& m : a->markers) n += m.points.size();
+    return n;
   }
 
   void onSemantic(const visualization_msgs::MarkerArrayConstPtr& m) { semantic_ = m; }
@@ -165,13 +182,6 @@ class MappingNodeTest : public ::testing::Test {
     cloud_.reset();
     uncertainty_.reset();
     cloud_pub_.publish(cloud);
-    // Views of an empty map (sent after reset) may still be on their way: wait for a full one.
-    auto cubes = [](const visualization_msgs::MarkerArrayConstPtr& a) {
-      size_t n = 0;
-      if (a)
-        for (const auto& m : a->markers) n += m.points.size();
-      return n;
-    };
     ASSERT_TRUE(waitFor([&] {
       return cubes(semantic_) > 0 && cubes(uncertainty_) > 0 && cloud_ && cloud_->width > 0;
     }));
@@ -370,8 +380,11 @@ TEST_F(MappingNodeTest, EvidentialMapMessageHoldsTheSerialisedTree) {
   eo::EvidentialMapConstPtr map;
   ros::Subscriber sub = nh_.subscribe<eo::EvidentialMap>(
       "evidential_map", 1, [&](const eo::EvidentialMapConstPtr& m) { map = m; });
+  ASSERT_TRUE(waitFor([&] { return sub.getNumPublishers() > 0; }));
+  const ros::Time sent = ros::Time::now();
   insert(cloudOf(scene()));
-  ASSERT_TRUE(waitFor([&] { return map && map->data.size() > 100; }));
+  // The latched map of the reset in SetUp may arrive first: wait for the one after the scan.
+  ASSERT_TRUE(waitFor([&] { return map && map->header.stamp >= sent; }));
   EXPECT_EQ(map->num_classes, kC);
   EXPECT_EQ(map->fusion_rule, "dempster");
   std::stringstream s(std::string(map->data.begin(), map->data.end()));
