@@ -28,10 +28,11 @@ log() { echo "bench.sh: $*" >&2; }
 
 # --- build (Release) ----------------------------------------------------------------------------
 if grep -q 'add_subdirectory(bench)' "${root}/CMakeLists.txt"; then
+  mkdir -p "${build}"
   log "configuring ${build}/core (Release, EVIDENTIAL_OCTOMAP_BENCH=ON)"
   cmake -S "${root}" -B "${build}/core" -DCMAKE_BUILD_TYPE=Release -DEVIDENTIAL_OCTOMAP_BENCH=ON \
-    -DEVIDENTIAL_OCTOMAP_TOOLS=OFF -DBUILD_TESTING=OFF >"${build}.configure.log" 2>&1 ||
-    { cat "${build}.configure.log" >&2; exit 1; }
+    -DEVIDENTIAL_OCTOMAP_TOOLS=OFF -DBUILD_TESTING=OFF >"${build}/core.configure.log" 2>&1 ||
+    { cat "${build}/core.configure.log" >&2; exit 1; }
   cmake --build "${build}/core" -j"${jobs}" --target evidential_bench
   bin="${build}/core/bench/evidential_bench"
 else
