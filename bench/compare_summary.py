@@ -19,9 +19,17 @@ def main():
         print(__doc__.strip(), file=sys.stderr)
         return 2
     with open(sys.argv[1]) as f:
-        old = json.load(f).get("summary", {})
+        old_doc = json.load(f)
     with open(sys.argv[2]) as f:
-        new = json.load(f).get("summary", {})
+        new_doc = json.load(f)
+    old, new = old_doc.get("summary", {}), new_doc.get("summary", {})
+    old_setup, new_setup = old_doc.get("setup", {}), new_doc.get("setup", {})
+    differ = [k for k in ("scans", "resolution", "num_classes", "points_per_scan", "quick")
+              if old_setup.get(k) != new_setup.get(k)]
+    if differ:
+        print("WARNING: the runs differ in " + ", ".join(
+            f"{k} ({old_setup.get(k)} vs {new_setup.get(k)})" for k in differ) +
+              ": the figures below are not comparable")
     keys = [k for k in new if k in old] + [k for k in new if k not in old]
     width = max(len(k) for k in keys) if keys else 10
     print(f"{'metric':<{width}}  {'baseline':>12}  {'now':>12}  {'change':>8}")

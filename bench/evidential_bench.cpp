@@ -670,6 +670,7 @@ int main(int argc, char** argv) try {
     Json setup = Json::object();
     setup.set("data", o.data).set("classes", o.classes).set("scans", int(scans.size()));
     setup.set("num_classes", C).set("resolution", o.resolution).set("repeats", o.repeats);
+    setup.set("quick", o.quick);
     setup.set("evidence", "derived: one-hot of the predicted class, magnitude 20");
     setup.set("points_per_scan", double(find("plain", -1.0, 1, false).totalPoints()) / scans.size());
     root.set("setup", setup);
