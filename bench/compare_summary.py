@@ -14,6 +14,11 @@ def higher_is_better(key):
     return key.startswith("hz_") or key.startswith("speedup_")
 
 
+def setup_value(setup, key):
+    # Files written before "quick" was recorded were full runs.
+    return setup.get(key, False if key == "quick" else None)
+
+
 def main():
     if len(sys.argv) != 3:
         print(__doc__.strip(), file=sys.stderr)
@@ -25,7 +30,7 @@ def main():
     old, new = old_doc.get("summary", {}), new_doc.get("summary", {})
     old_setup, new_setup = old_doc.get("setup", {}), new_doc.get("setup", {})
     differ = [k for k in ("scans", "resolution", "num_classes", "points_per_scan", "quick")
-              if old_setup.get(k) != new_setup.get(k)]
+              if setup_value(old_setup, k) != setup_value(new_setup, k)]
     if differ:
         print("WARNING: the runs differ in " + ", ".join(
             f"{k} ({old_setup.get(k)} vs {new_setup.get(k)})" for k in differ) +
