@@ -1,13 +1,12 @@
 // Drop-in use of evidential_octomap: the tree is an OctoMap occupancy tree that also fuses
 // per-point semantic evidence (e.g. from an evidential segmentation network).
 //   example_drop_in [out.ot]
+#include <evidential_octomap/evidential_octree.h>
+#include <octomap/octomap.h>
+
 #include <iostream>
 #include <memory>
 #include <vector>
-
-#include <octomap/octomap.h>
-
-#include <evidential_octomap/evidential_octree.h>
 
 int main(int argc, char** argv) {
   using evidential_octomap::EvidentialOcTree;

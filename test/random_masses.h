@@ -13,7 +13,9 @@ class RandomMasses {
  public:
   explicit RandomMasses(unsigned seed) : rng_(seed) {}
 
-  double uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng_); }
+  double uniform(double lo, double hi) {
+    return std::uniform_real_distribution<double>(lo, hi)(rng_);
+  }
   int integer(int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(rng_); }
 
   // A random opinion: a mix of dense, sparse (most beliefs zero), nearly dogmatic and vacuous.
@@ -23,7 +25,7 @@ class RandomMasses {
     const int kind = integer(0, 9);
     if (kind == 0) return Opinion::vacuous(num_classes);
     double u = uniform(0.0, 1.0);
-    if (kind == 1) u = uniform(1e-6, 1e-3);        // nearly dogmatic
+    if (kind == 1) u = uniform(1e-6, 1e-3);  // nearly dogmatic
     if (u <= 0.0) u = 1e-9;
     double total = 0.0;
     for (int c = 0; c < num_classes; ++c) {

@@ -54,7 +54,8 @@ inline bool refCombine(const RefOpinion& m1, const RefOpinion& m2, RefOpinion* o
   out->belief.assign(n, 0.0L);
   for (size_t c = 0; c < n; ++c) {
     out->belief[c] = (m1.belief[c] * m2.belief[c] + m1.belief[c] * m2.uncertainty +
-                      m2.belief[c] * m1.uncertainty) / norm;
+                      m2.belief[c] * m1.uncertainty) /
+                     norm;
   }
   out->uncertainty = m1.uncertainty * m2.uncertainty / norm;
   return true;

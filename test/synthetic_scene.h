@@ -5,13 +5,13 @@
 // Surfaces sit in the middle of voxel layers at resolution 0.2 m, so no point lands on a boundary.
 #pragma once
 
+#include <octomap/octomap.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
 #include <vector>
-
-#include <octomap/octomap.h>
 
 namespace evidential_octomap {
 namespace test {

@@ -1,8 +1,8 @@
 // The class table (config/classes_*.yaml): names, colours, ignore class and learning map.
+#include <gtest/gtest.h>
+
 #include <stdexcept>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "evidential_octomap/class_table.h"
 

@@ -2,14 +2,14 @@
 // (DESIGN §1 "the stable form"); these tests check it against sequential belief-space
 // combination of the extended beliefs, in both orders, at the rule, tree and integrator level,
 // and over 10^6 fusions into one voxel beside a naive float belief-space rule that fails.
+#include <gtest/gtest.h>
+#include <octomap/octomap.h>
+
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <octomap/octomap.h>
 
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/fusion_rule.h"
@@ -60,7 +60,8 @@ Opinion extended(const std::vector<float>& e, double k) {
 
 double maxDiff(const VoxelOpinion& v, const Opinion& o) {
   double d = std::fabs(v.uncertainty - o.uncertainty);
-  for (size_t c = 0; c < o.belief.size(); ++c) d = std::max(d, std::fabs(v.belief[c] - o.belief[c]));
+  for (size_t c = 0; c < o.belief.size(); ++c)
+    d = std::max(d, std::fabs(v.belief[c] - o.belief[c]));
   return d;
 }
 
@@ -88,7 +89,8 @@ int argmaxOf(const RefOpinion& o) {
 double kernelClosedForm(double d, double length, double sigma0) {
   if (d >= length) return 0.0;
   const double r = d / length;
-  const double k = sigma0 * ((2 + std::cos(2 * kPi * r)) / 3 * (1 - r) + std::sin(2 * kPi * r) / (2 * kPi));
+  const double k =
+      sigma0 * ((2 + std::cos(2 * kPi * r)) / 3 * (1 - r) + std::sin(2 * kPi * r) / (2 * kPi));
   return std::min(1.0, std::max(0.0, k));
 }
 
@@ -113,7 +115,8 @@ TEST(DempsterRule, EvidenceSpaceAgreesWithBeliefSpaceInBothOrders) {
       const VoxelOpinion voxel = rule->readout(payload.data(), num_classes);
 
       Opinion forward = Opinion::vacuous(num_classes), backward = Opinion::vacuous(num_classes);
-      for (int i = 0; i < n; ++i) forward = dempsterCombine(forward, extended(evidence[i], kernel[i]));
+      for (int i = 0; i < n; ++i)
+        forward = dempsterCombine(forward, extended(evidence[i], kernel[i]));
       for (int i = n - 1; i >= 0; --i) {
         backward = dempsterCombine(backward, extended(evidence[i], kernel[i]));
       }
@@ -264,7 +267,8 @@ TEST(DempsterRule, IntegratedScansAgreeWithBeliefSpaceInBothOrders) {
     expected = dempsterCombine(expected, extended(e, 1.0));
     const double u = opinionFromEvidence(e.data(), num_classes).uncertainty;
     const double support = 0.3 * 1.0 * std::exp(1.0 - 3.0 * u);  // l beta e^{1 - gamma u}
-    expected_above = dempsterCombine(expected_above, extended(e, kernelClosedForm(d_above, support, 1.0)));
+    expected_above =
+        dempsterCombine(expected_above, extended(e, kernelClosedForm(d_above, support, 1.0)));
   }
   ASSERT_LT(expected_above.uncertainty, 1.0);  // the neighbour did receive evidence
   for (const auto* tree : {forward_tree.get(), backward_tree.get()}) {
@@ -302,7 +306,8 @@ NaiveFloatOpinion naiveCombine(const NaiveFloatOpinion& m1, const std::vector<fl
   NaiveFloatOpinion out;
   for (int c = 0; c < num_classes; ++c) {
     out.belief.push_back((m1.belief[c] * m2.belief[c] + m1.belief[c] * m2.uncertainty +
-                          m2.belief[c] * m1.uncertainty) / norm);
+                          m2.belief[c] * m1.uncertainty) /
+                         norm);
   }
   out.uncertainty = m1.uncertainty * m2.uncertainty / norm;
   return out;

@@ -1,13 +1,13 @@
 // Sparse kernel of Melkumyan & Ramos, its adaptive length and the per-scan percentile threshold
 // (DESIGN §1). Expected values are worked out by hand in the comments.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numeric>
 #include <random>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "evidential_octomap/kernel.h"
 

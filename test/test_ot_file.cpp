@@ -1,5 +1,9 @@
 // Files: .ot round trips (AbstractOcTree::read, saveMap/loadMap), .bt in plain OcTree,
 // ColorOcTree export, exact merge, corrupt/truncated/foreign files and atomic saves.
+#include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/ColorOcTree.h>
+#include <octomap/octomap.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -16,11 +20,6 @@
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <octomap/AbstractOcTree.h>
-#include <octomap/ColorOcTree.h>
-#include <octomap/octomap.h>
 
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
@@ -71,8 +70,8 @@ void writeBytes(const std::string& path, const std::string& bytes) {
 }
 
 // A map with non-default settings everywhere the file has to carry them.
-std::unique_ptr<EvidentialOcTree> makeMap(const std::string& rule, int scans = 2, unsigned seed = 10,
-                                          float shift = 0.0f) {
+std::unique_ptr<EvidentialOcTree> makeMap(const std::string& rule, int scans = 2,
+                                          unsigned seed = 10, float shift = 0.0f) {
   SyntheticScene scene;
   SemanticConfig config;
   config.rule = rule;
@@ -101,7 +100,8 @@ std::unique_ptr<EvidentialOcTree> smallMap() {
   return tree;
 }
 
-// --- round trips ----------------------------------------------------------------------------------
+// --- round trips
+// ----------------------------------------------------------------------------------
 
 TEST(OtFile, RoundTripThroughAbstractOcTreeReadIsBitExact) {
   TempDir dir;
@@ -169,7 +169,10 @@ TEST(OtFile, ManyClassesAndOddNamesRoundTrip) {
   for (int c = 0; c < 255; ++c) names.push_back("class " + std::to_string(c));
   names[0] = "";
   names[1] = "two words\nand a newline";
-  names[2] = "\xc3\xbc" "nic\xc3\xb6" "de";
+  names[2] =
+      "\xc3\xbc"
+      "nic\xc3\xb6"
+      "de";
   names[3] = std::string(300, 'x');
   tree.setClassNames(names);
   octomap::Pointcloud points;
@@ -240,7 +243,8 @@ TEST(BtFile, LoadMapRefusesABtFileNamingThePath) {
   }
 }
 
-// --- ColorOcTree export ----------------------------------------------------------------------------
+// --- ColorOcTree export
+// ----------------------------------------------------------------------------
 
 ClassTable threeClasses() {
   ClassTable table;
@@ -315,7 +319,8 @@ TEST(ColorExport, ClassTableOfWrongSizeThrows) {
   EXPECT_THROW(toColorOcTree(*tree, two, ColorMode::kClass), std::invalid_argument);
 }
 
-// --- merge -----------------------------------------------------------------------------------------
+// --- merge
+// -----------------------------------------------------------------------------------------
 
 TEST(Merge, IsSymmetricForEveryRule) {
   for (const std::string& rule : kFusionRuleNames) {
@@ -395,7 +400,8 @@ TEST(Merge, MismatchedMapsThrowAndChangeNothing) {
   EXPECT_TRUE(compareTrees(*a, before));
 }
 
-// --- corrupt, truncated and foreign files ------------------------------------------------------------
+// --- corrupt, truncated and foreign files
+// ------------------------------------------------------------
 
 TEST(CorruptFile, TruncationAtAnyOffsetThrows) {
   TempDir dir;
@@ -408,7 +414,8 @@ TEST(CorruptFile, TruncationAtAnyOffsetThrows) {
   size_t tried = 0;
   for (size_t length = 0; length < bytes.size(); length += (length < 64 ? 1 : 7)) {
     writeBytes(cut, bytes.substr(0, length));
-    EXPECT_THROW(loadMap(cut), std::runtime_error) << "truncated to " << length << " of " << bytes.size();
+    EXPECT_THROW(loadMap(cut), std::runtime_error)
+        << "truncated to " << length << " of " << bytes.size();
     ++tried;
   }
   // The last byte too.
@@ -481,7 +488,8 @@ TEST(CorruptFile, RandomByteFlipsThrowOrGiveAWellFormedTree) {
     std::mt19937 rng(5);
     size_t threw = 0, loaded = 0, garbage = 0;
     std::string first_problem;
-    for (int trial = 0; trial < 600; ++trial) {
+    const int kTrials = 400;
+    for (int trial = 0; trial < kTrials; ++trial) {
       std::string bad = bytes;
       std::uniform_int_distribution<size_t> where(data_start + 5, bytes.size() - 1);
       const int flips = 1 + trial % 3;
@@ -497,14 +505,16 @@ TEST(CorruptFile, RandomByteFlipsThrowOrGiveAWellFormedTree) {
           ++loaded;
         } else {
           ++garbage;
-          if (first_problem.empty()) first_problem = "trial " + std::to_string(trial) + ": " + problem;
+          if (first_problem.empty())
+            first_problem = "trial " + std::to_string(trial) + ": " + problem;
         }
       } catch (const std::runtime_error&) {
         ++threw;
       }
     }
     EXPECT_GT(threw, 0u) << rule;
-    EXPECT_EQ(garbage, 0u) << rule << ": " << garbage << " of 600 corrupted files loaded as ill-formed "
+    EXPECT_EQ(garbage, 0u) << rule << ": " << garbage << " of " << kTrials
+                           << " corrupted files loaded as ill-formed "
                            << "maps (first: " << first_problem << ")";
     RecordProperty("byte_flips_loaded_" + rule, std::to_string(loaded));
   }
@@ -572,7 +582,8 @@ TEST(ForeignFile, WrongFileTypeIdThrows) {
   EXPECT_THROW(loadMap(path), std::runtime_error);
 }
 
-// --- atomic saves ----------------------------------------------------------------------------------
+// --- atomic saves
+// ----------------------------------------------------------------------------------
 
 TEST(AtomicSave, SuccessfulSaveLeavesOnlyTheTarget) {
   TempDir dir;
@@ -606,7 +617,8 @@ TEST(AtomicSave, FailedSaveLeavesThePreviousFileIntact) {
   {
     std::stringstream s;
     big->write(s);
-    ASSERT_GT(s.str().size(), previous.size() + 8192) << "the new map must be larger than the limit";
+    ASSERT_GT(s.str().size(), previous.size() + 8192)
+        << "the new map must be larger than the limit";
   }
   // A file-size limit makes the write fail part-way, as a full disk would (works for root too).
   struct rlimit old_limit;

@@ -1,6 +1,9 @@
 // Scan integration on a SYNTHETIC scene with known ground truth (synthetic_scene.h): occupancy by
 // ray casting, semantics by the adaptive kernel, bad inputs, key-range edges, the percentile
 // threshold, leaf creation, and the three fusion rules through one integrator.
+#include <gtest/gtest.h>
+#include <octomap/octomap.h>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -10,9 +13,6 @@
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <octomap/octomap.h>
 
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/scan_integrator.h"
@@ -30,8 +30,8 @@ using KeyTuple = std::tuple<int, int, int>;
 KeyTuple tupleOf(const octomap::OcTreeKey& k) { return {k[0], k[1], k[2]}; }
 
 // Majority true label of the points in each endpoint voxel.
-std::map<KeyTuple, int> groundTruthVoxels(const octomap::OcTree& keys_from, const SyntheticScan& scan,
-                                          int num_classes) {
+std::map<KeyTuple, int> groundTruthVoxels(const octomap::OcTree& keys_from,
+                                          const SyntheticScan& scan, int num_classes) {
   std::map<KeyTuple, std::vector<int>> votes;
   for (size_t i = 0; i < scan.points_W.size(); ++i) {
     auto& v = votes[tupleOf(keys_from.coordToKey(scan.points_W.getPoint(i)))];
@@ -164,7 +164,8 @@ TEST(ScanIntegration, SceneInTheNegativeOctantIsMappedAlike) {
   SyntheticScan there = here;
   there.origin_W = here.origin_W + shift;
   there.points_W = octomap::Pointcloud();
-  for (size_t i = 0; i < here.points_W.size(); ++i) there.points_W.push_back(here.points_W.getPoint(i) + shift);
+  for (size_t i = 0; i < here.points_W.size(); ++i)
+    there.points_W.push_back(here.points_W.getPoint(i) + shift);
   SemanticConfig config;
   config.ds_multiplier = 0.0;  // a down-sampling grid need not align with the shift
   EvidentialOcTree a(0.2, scene.num_classes, config), b(0.2, scene.num_classes, config);
@@ -315,7 +316,8 @@ TEST(ScanIntegration, PointsOutsideKeyRangeAreSkippedAndCounted) {
   points.push_back(-1.9f, 0.3f, 0.1f);
   evidence.insert(evidence.end(), {0.0f, 5.0f});
   InsertStats stats;
-  ASSERT_NO_THROW(stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f)));
+  ASSERT_NO_THROW(
+      stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f)));
   EXPECT_EQ(stats.points_in, 6u);
   EXPECT_EQ(stats.points_skipped, 4u);
   // The two good points were inserted.
@@ -340,8 +342,8 @@ TEST(ScanIntegration, KernelDoesNotWrapAroundTheKeyRange) {
   const double half_range = 32768 * 0.2;
   for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
     if (!tree.payload(&*it)) continue;
-    EXPECT_GT(it.getX(), half_range - 10.0) << "semantic leaf at " << it.getCoordinate()
-                                            << " far from the point at " << p;
+    EXPECT_GT(it.getX(), half_range - 10.0)
+        << "semantic leaf at " << it.getCoordinate() << " far from the point at " << p;
   }
 }
 
@@ -356,7 +358,8 @@ TEST(ScanIntegration, PoseOverloadEqualsWorldFrameInsertion) {
     points_S.push_back(T_S_W.transform(scan.points_W.getPoint(i)));
   }
   octomap::Pointcloud points_W;
-  for (size_t i = 0; i < points_S.size(); ++i) points_W.push_back(T_W_S.transform(points_S.getPoint(i)));
+  for (size_t i = 0; i < points_S.size(); ++i)
+    points_W.push_back(T_W_S.transform(points_S.getPoint(i)));
   EvidentialOcTree by_pose(0.2, scene.num_classes), by_points(0.2, scene.num_classes);
   by_pose.insertSemanticScan(points_S, scan.evidence, T_W_S);
   by_points.insertSemanticScan(points_W, scan.evidence, T_W_S.trans());
@@ -371,7 +374,8 @@ TEST(ScanIntegration, IntegratorEqualsTreeInsertion) {
   config.threads = 1;
   EvidentialOcTree a(0.2, scene.num_classes, config), b(0.2, scene.num_classes, config);
   const InsertStats sa = a.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
-  const InsertStats sb = ScanIntegrator(config).integrate(scan.points_W, scan.evidence, scan.origin_W, &b);
+  const InsertStats sb =
+      ScanIntegrator(config).integrate(scan.points_W, scan.evidence, scan.origin_W, &b);
   EXPECT_TRUE(compareTrees(a, b));
   EXPECT_EQ(sa.voxels_updated, sb.voxels_updated);
   EXPECT_EQ(sa.semantic_points, sb.semantic_points);
@@ -404,7 +408,8 @@ TEST(ScanIntegration, OneAndTwoThreadsGiveTheSameLabels) {
 std::set<KeyTuple> fullDepthLeafKeys(octomap::OcTree& tree) {
   tree.expand();
   std::set<KeyTuple> keys;
-  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) keys.insert(tupleOf(it.getKey()));
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it)
+    keys.insert(tupleOf(it.getKey()));
   return keys;
 }
 
@@ -524,15 +529,16 @@ TEST(KernelLeafCreation, VoxelsUpdatedCountsTheSemanticLeaves) {
   const InsertStats stats = tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
   tree.expand();
   size_t semantic_leaves = 0;
-  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) semantic_leaves += it->hasSemantics();
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it)
+    semantic_leaves += it->hasSemantics();
   EXPECT_EQ(stats.voxels_updated, semantic_leaves);
 }
 
 // --- kernel settings as seen through the integrator ---------------------------------------------
 
 // Evidence reaching the voxel `offset_cells` voxels above a single point at a voxel centre.
-VoxelOpinion neighbourAfterOnePoint(const SemanticConfig& config, const std::vector<float>& evidence,
-                                    int offset_cells) {
+VoxelOpinion neighbourAfterOnePoint(const SemanticConfig& config,
+                                    const std::vector<float>& evidence, int offset_cells) {
   EvidentialOcTree tree(0.2, static_cast<int>(evidence.size()), config);
   const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(0.1f, 0.1f, 0.1f));
   octomap::Pointcloud points;
@@ -600,14 +606,17 @@ TEST(ScanIntegration, DownSamplingMergesPointsOfOneCell) {
   }
   points.push_back(-2.1f, 0.1f, 0.1f);
   evidence.insert(evidence.end(), {1.0f, 3.0f});
-  const InsertStats stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
+  const InsertStats stats =
+      tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
   EXPECT_EQ(stats.semantic_points, 2u);
   EXPECT_EQ(tree.query(octomap::point3d(2.1f, 0.1f, 0.1f)).label, 0);
   EXPECT_EQ(tree.query(octomap::point3d(-2.1f, 0.1f, 0.1f)).label, 1);
   SemanticConfig none = config;
   none.ds_multiplier = 0.0;
   EvidentialOcTree all(0.2, 2, none);
-  EXPECT_EQ(all.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f)).semantic_points, 11u);
+  EXPECT_EQ(
+      all.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f)).semantic_points,
+      11u);
 }
 
 TEST(ScanIntegration, InvalidOriginThrowsAndChangesNothing) {
@@ -647,9 +656,8 @@ TEST(PercentileThreshold, DropsTheMostUncertainPsiPercent) {
       for (int c = 0; c < num_classes; ++c) s += scan.evidence[i * num_classes + c];
       u[i] = num_classes / s;
     }
-    const size_t above = std::count_if(u.begin(), u.end(), [&](double x) {
-      return float(x) > stats.uncertainty_threshold;
-    });
+    const size_t above = std::count_if(
+        u.begin(), u.end(), [&](double x) { return float(x) > stats.uncertainty_threshold; });
     const size_t expected = static_cast<size_t>(std::floor(n * psi / 100.0));
     // The fixture has no tie at the threshold, so exactly floor(n psi / 100) points go.
     std::vector<float> uf(u.begin(), u.end());
@@ -690,7 +698,8 @@ TEST(PercentileThreshold, DroppedPointsLeaveNoEvidence) {
   points.push_back(2.1f, 0.1f, 0.1f);
   points.push_back(-2.1f, 0.1f, 0.1f);
   const std::vector<float> evidence{10.0f, 0.0f, 0.0f, 0.5f};
-  const InsertStats stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
+  const InsertStats stats =
+      tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
   EXPECT_EQ(stats.points_dropped_uncertain, 1u);
   EXPECT_EQ(tree.query(octomap::point3d(2.1f, 0.1f, 0.1f)).label, 0);
   EXPECT_EQ(tree.query(octomap::point3d(-2.1f, 0.1f, 0.1f)).label, -1);
@@ -708,7 +717,8 @@ TEST(ScanIntegration, PointsBeyondMaxRangeGiveFreeSpaceOnly) {
   points.push_back(3.1f, 0.1f, 0.1f);
   points.push_back(-9.9f, 0.1f, 0.1f);  // 10 m away
   const std::vector<float> evidence{10.0f, 0.0f, 0.0f, 10.0f};
-  const InsertStats stats = tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
+  const InsertStats stats =
+      tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
   EXPECT_EQ(stats.points_beyond_range, 1u);
   EXPECT_EQ(tree.query(octomap::point3d(3.1f, 0.1f, 0.1f)).label, 0);
   const EvidentialOcTreeNode* far_end = tree.search(octomap::point3d(-9.9f, 0.1f, 0.1f));

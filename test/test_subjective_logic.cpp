@@ -1,13 +1,13 @@
 // Subjective-logic opinions and the belief-space reduced Dempster rule (DESIGN §1), checked
 // against a long-double O(C^2) reference over thousands of random masses.
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "evidential_octomap/subjective_logic.h"
 #include "random_masses.h"

@@ -1,6 +1,9 @@
 // EvidentialOcTree as an OctoMap tree: node size, memory per leaf, queries, inner-node
 // summaries, pruning that never changes a leaf-level query, the inherited OctoMap API,
 // settings and copies.
+#include <gtest/gtest.h>
+#include <octomap/octomap.h>
+
 #include <cstring>
 #include <iostream>
 #include <map>
@@ -10,9 +13,6 @@
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <gtest/gtest.h>
-#include <octomap/octomap.h>
 
 #include "evidential_octomap/evidential_octree.h"
 #include "synthetic_scene.h"
@@ -145,7 +145,8 @@ TEST(EvidentialOcTree, BytesPerLeafFreeAndSemantic) {
   EXPECT_LE(extra, 3.0 * 4.0 * num_classes);
 }
 
-// --- queries --------------------------------------------------------------------------------------
+// --- queries
+// --------------------------------------------------------------------------------------
 
 TEST(EvidentialOcTree, QueriesByPointAndKeyAgree) {
   auto tree = scannedTree();
@@ -180,7 +181,8 @@ TEST(EvidentialOcTree, UnknownSpaceReadsAsVacuous) {
   EXPECT_EQ(tree->payload(nullptr), nullptr);
 }
 
-// --- inner nodes and pruning ----------------------------------------------------------------------
+// --- inner nodes and pruning
+// ----------------------------------------------------------------------
 
 // Checks every inner node against its children; returns how many summaries were checked.
 size_t expectInnerSummaries(const EvidentialOcTree& tree, const std::string& context) {
@@ -216,7 +218,8 @@ size_t expectInnerSummaries(const EvidentialOcTree& tree, const std::string& con
                       << " is not the richest child's payload";
     // What a coarse query returns at that depth (depth 0 means full depth in OctoMap).
     if (it.getDepth() > 0) {
-      EXPECT_EQ(tree.query(it.getKey(), it.getDepth()).belief, tree.opinion(richest).belief) << context;
+      EXPECT_EQ(tree.query(it.getKey(), it.getDepth()).belief, tree.opinion(richest).belief)
+          << context;
     }
     ++checked;
   }
@@ -230,7 +233,8 @@ TEST(InnerNodes, SummaryIsThePayloadOfTheRichestChild) {
     // Later scans update only part of the map: summaries above them must follow.
     SyntheticScene scene;
     for (int i = 0; i < 3; ++i) {
-      const auto scan = scene.scan(octomap::point3d(1.05f + 0.7f * i, 0.5f - 0.4f * i, 1.7f), 30 + i);
+      const auto scan =
+          scene.scan(octomap::point3d(1.05f + 0.7f * i, 0.5f - 0.4f * i, 1.7f), 30 + i);
       tree->insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
       expectInnerSummaries(*tree, rule + " after scan " + std::to_string(i + 2));
     }
@@ -241,7 +245,8 @@ TEST(InnerNodes, SummariesFollowEditsAndMerges) {
   auto tree = scannedTree("dempster", 1);
   // Make one leaf far richer than anything else, then let the summaries follow.
   auto it = tree->begin_leafs();
-  while (it != tree->end_leafs() && !(it->hasSemantics() && it.getDepth() == tree->getTreeDepth())) ++it;
+  while (it != tree->end_leafs() && !(it->hasSemantics() && it.getDepth() == tree->getTreeDepth()))
+    ++it;
   ASSERT_NE(it, tree->end_leafs());
   const octomap::OcTreeKey key = it.getKey();
   tree->payloadForUpdate(tree->leafForUpdate(key, false))[1] += 1000.0f;
@@ -320,13 +325,15 @@ TEST(Pruning, MergesIdenticalBlocksOnlyAndKeepsTheirAnswers) {
   EXPECT_EQ(tree.query(in_block1).label, 2);
 }
 
-// --- the inherited OctoMap API --------------------------------------------------------------------
+// --- the inherited OctoMap API
+// --------------------------------------------------------------------
 
 TEST(OctoMapApi, UpdateNodeSearchCastRayIteratorsAndWriteBinaryWork) {
   EvidentialOcTree tree(0.1, 4);
   const octomap::point3d wall(2.05f, 0.05f, 0.05f);
   for (int i = 0; i < 3; ++i) tree.updateNode(wall, true);
-  for (float x = 0.05f; x < 2.0f; x += 0.1f) tree.updateNode(octomap::point3d(x, 0.05f, 0.05f), false);
+  for (float x = 0.05f; x < 2.0f; x += 0.1f)
+    tree.updateNode(octomap::point3d(x, 0.05f, 0.05f), false);
   tree.updateInnerOccupancy();
   const EvidentialOcTreeNode* node = tree.search(wall);
   ASSERT_NE(node, nullptr);
@@ -346,7 +353,8 @@ TEST(OctoMapApi, UpdateNodeSearchCastRayIteratorsAndWriteBinaryWork) {
   EXPECT_EQ(leaves, tree.getNumLeafNodes());
   EXPECT_EQ(occupied, 1u);
   size_t in_box = 0;
-  for (auto it = tree.begin_leafs_bbx(octomap::point3d(1.91f, 0.01f, 0.01f), octomap::point3d(2.19f, 0.09f, 0.09f));
+  for (auto it = tree.begin_leafs_bbx(octomap::point3d(1.91f, 0.01f, 0.01f),
+                                      octomap::point3d(2.19f, 0.09f, 0.09f));
        it != tree.end_leafs_bbx(); ++it) {
     ++in_box;
   }
@@ -414,7 +422,8 @@ TEST(EvidentialOcTree, ClearThenInsertEqualsAFreshTree) {
   EXPECT_TRUE(compareTrees(*used, fresh));
 }
 
-// --- settings -------------------------------------------------------------------------------------
+// --- settings
+// -------------------------------------------------------------------------------------
 
 TEST(EvidentialOcTree, ClassCountMustBeOneTo255) {
   EXPECT_THROW(EvidentialOcTree(0.2, 0), std::invalid_argument);
@@ -488,7 +497,8 @@ TEST(EvidentialOcTree, DeleteNodeThenCompactKeepsCountsConsistent) {
   // have siblings only.
   std::vector<octomap::OcTreeKey> candidates, deleted_keys;
   for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
-    if (it->hasSemantics() && it.getDepth() == tree->getTreeDepth()) candidates.push_back(it.getKey());
+    if (it->hasSemantics() && it.getDepth() == tree->getTreeDepth())
+      candidates.push_back(it.getKey());
   }
   size_t deleted = 0;
   for (const auto& key : candidates) {

@@ -3,12 +3,12 @@
 // Shared by the file, merge and copy tests (voxblox layer_test_utils style).
 #pragma once
 
+#include <gtest/gtest.h>
+#include <octomap/OcTreeNode.h>
+
 #include <cstring>
 #include <sstream>
 #include <string>
-
-#include <gtest/gtest.h>
-#include <octomap/OcTreeNode.h>
 
 #include "evidential_octomap/evidential_octree.h"
 
@@ -72,7 +72,8 @@ inline bool compareNodes(const EvidentialOcTree& a, const EvidentialOcTreeNode* 
 
 // Compares semantic settings (C, class names, rule and every parameter in SemanticConfig that
 // the file format stores), occupancy parameters and all nodes.
-inline ::testing::AssertionResult compareTrees(const EvidentialOcTree& a, const EvidentialOcTree& b) {
+inline ::testing::AssertionResult compareTrees(const EvidentialOcTree& a,
+                                               const EvidentialOcTree& b) {
   auto fail = [](const std::string& what) { return ::testing::AssertionFailure() << what; };
   if (a.getTreeType() != b.getTreeType()) return fail("tree type differs");
   if (!sameBits(a.getResolution(), b.getResolution())) return fail("resolution differs");
@@ -87,8 +88,9 @@ inline ::testing::AssertionResult compareTrees(const EvidentialOcTree& a, const 
   if (ca.rule != cb.rule) return fail("config.rule differs");
   if (!sameBits(ca.length_scale, cb.length_scale) || !sameBits(ca.sigma0, cb.sigma0) ||
       !sameBits(ca.beta, cb.beta) || !sameBits(ca.gamma, cb.gamma) ||
-      !sameBits(ca.drop_percent, cb.drop_percent) || !sameBits(ca.ds_multiplier, cb.ds_multiplier) ||
-      !sameBits(ca.max_range, cb.max_range) || !sameBits(ca.sbki_prior, cb.sbki_prior)) {
+      !sameBits(ca.drop_percent, cb.drop_percent) ||
+      !sameBits(ca.ds_multiplier, cb.ds_multiplier) || !sameBits(ca.max_range, cb.max_range) ||
+      !sameBits(ca.sbki_prior, cb.sbki_prior)) {
     return fail("a numeric SemanticConfig parameter differs");
   }
   if (ca.adaptive_length != cb.adaptive_length ||
@@ -105,7 +107,8 @@ inline ::testing::AssertionResult compareTrees(const EvidentialOcTree& a, const 
     return fail("occupancy parameters differ");
   }
   if (a.size() != b.size()) {
-    return fail("node count differs: " + std::to_string(a.size()) + " vs " + std::to_string(b.size()));
+    return fail("node count differs: " + std::to_string(a.size()) + " vs " +
+                std::to_string(b.size()));
   }
   if (a.numSemanticNodes() != b.numSemanticNodes()) {
     return fail("semantic node count differs: " + std::to_string(a.numSemanticNodes()) + " vs " +

@@ -1,15 +1,14 @@
 // Consumer of the installed library: insert a tiny scan, write an .ot, read it back through
 // OctoMap's generic reader and check that the tree type survives. Exit code 0 = success.
+#include <evidential_octomap/evidential_octree.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/octomap.h>
+
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <octomap/AbstractOcTree.h>
-#include <octomap/octomap.h>
-
-#include <evidential_octomap/evidential_octree.h>
 
 int main(int argc, char** argv) {
   const std::string path = argc > 1 ? argv[1] : "consumer_map.ot";
@@ -52,7 +51,7 @@ int main(int argc, char** argv) {
     std::cerr << "read-back tree differs\n";
     return 1;
   }
-  std::cout << "consumer ok: " << read_back->size() << " nodes, "
-            << read_back->numSemanticNodes() << " semantic\n";
+  std::cout << "consumer ok: " << read_back->size() << " nodes, " << read_back->numSemanticNodes()
+            << " semantic\n";
   return 0;
 }
