@@ -3,14 +3,18 @@
 #   bash src/ros/scripts/rviz_screenshot.sh [out.png]      (default docs/images/rviz_demo.png)
 #   RVIZ=rviz_cfg/demo_semantickitti_uncertainty.rviz bash src/ros/scripts/rviz_screenshot.sh \
 #     docs/images/rviz_demo_uncertainty.png               (the uncertainty view)
-# Needs a built catkin workspace (WS, default build/catkin_ws) and xvfb, imagemagick.
+# Needs a built catkin workspace (WS, default build/.catkin_ws or build/catkin_ws), xvfb and
+# imagemagick.
 # Runs demo.launch under Xvfb with software GL, waits until the map has been published after the
 # last scan (SCANS, default 10), waits WAIT seconds more for rviz to draw, grabs the root window,
 # stops everything. RATE sets the player's scans per second (default 0.4: one scan's insert).
 set -eo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 out="${1:-${root}/docs/images/rviz_demo.png}"
-ws="${WS:-${root}/build/catkin_ws}"
+ws="${WS:-}"
+if [[ -z "${ws}" ]]; then
+  for ws in "${root}/build/.catkin_ws" "${root}/build/catkin_ws"; do [[ -d "${ws}/devel" ]] && break; done
+fi
 wait_draw="${WAIT:-15}"
 export PATH="/usr/bin:/bin:${PATH}"
 mkdir -p "$(dirname "${out}")"
@@ -34,7 +38,9 @@ port=$((11400 + RANDOM % 500))
 export ROS_MASTER_URI="http://localhost:${port}"
 rviz_config="${RVIZ:-rviz_cfg/demo_semantickitti.rviz}"
 [[ "${rviz_config}" = /* ]] || rviz_config="${root}/${rviz_config}"
-roslaunch --port "${port}" evidential_octomap demo.launch rviz:=true rate:="${RATE:-0.4}" \
+# The launch file by path: `roslaunch evidential_octomap demo.launch` walks the package tree and
+# fails with "multiple files named" when a workspace inside the repository links back to it.
+roslaunch --port "${port}" "${root}/launch/demo.launch" rviz:=true rate:="${RATE:-0.4}" \
   rviz_config:="${rviz_config}" >"${log}" 2>&1 &
 launch_pid=$!
 echo "rviz_screenshot: demo running (log ${log}); waiting for the last scan's map"
