@@ -22,8 +22,10 @@ struct Opinion {
 // EDL opinion of one point: alpha = e + 1, S = sum(alpha), b = e / S, u = C / S.
 Opinion opinionFromEvidence(const float* evidence, int num_classes);
 
-// Reduced Dempster rule M1 (+) M2. Conflict is computed in O(C). Under total conflict
-// (1 - conflict == 0) the result is the vacuous opinion rather than NaN.
+// Reduced Dempster rule M1 (+) M2 in O(C). The normaliser 1 - conflict is taken as the sum of the
+// unnormalised masses (equal for valid opinions, and free of the cancellation that
+// 1 - [(sum b1)(sum b2) - sum b1 b2] suffers near total conflict). Under total conflict the
+// result is the vacuous opinion rather than NaN.
 Opinion dempsterCombine(const Opinion& m1, const Opinion& m2);
 
 // Checks one evidence vector: every value finite and >= 0. Returns an empty string when valid,

@@ -310,7 +310,9 @@ size_t EvidentialOcTree::applyUpdates(std::vector<VoxelUpdate> updates,
     const VoxelUpdate& u = updates[order[i].second];
     if (i > 0 && order[i].first == order[i - 1].first) {
       VoxelUpdate& merged = sorted.back();
-      merged.occupancy = std::max(merged.occupancy, u.occupancy);  // a hit wins over a miss
+      if (u.occupancy != 0) {  // 0 means "no occupancy update", not a value between miss and hit
+        merged.occupancy = merged.occupancy == 0 ? u.occupancy : std::max(merged.occupancy, u.occupancy);
+      }
       if (u.increments != VoxelUpdate::kNoIncrements) merged.increments = u.increments;
     } else {
       sorted.push_back(u);

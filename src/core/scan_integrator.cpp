@@ -199,7 +199,7 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   std::vector<int> radius_ids(m, -1);
   std::unordered_map<int, std::vector<octomap::OcTreeKey>> offsets_by_radius;
   for (size_t j = 0; j < m; ++j) {
-    if (opinions[j].uncertainty > threshold) {
+    if (uncertainties[j] > threshold) {  // the same float values the threshold came from
       ++stats.points_dropped_uncertain;
       continue;
     }

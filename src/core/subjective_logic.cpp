@@ -36,22 +36,18 @@ Opinion opinionFromEvidence(const float* evidence, int num_classes) {
 
 Opinion dempsterCombine(const Opinion& m1, const Opinion& m2) {
   const int num_classes = m1.numClasses();
-  double sum1 = 0.0, sum2 = 0.0, agreement = 0.0;
-  for (int c = 0; c < num_classes; ++c) {
-    sum1 += m1.belief[c];
-    sum2 += m2.belief[c];
-    agreement += m1.belief[c] * m2.belief[c];
-  }
-  // Conflict delta = sum_{i != j} b1^i b2^j, in O(C).
-  const double normaliser = 1.0 - (sum1 * sum2 - agreement);
   Opinion out;
   out.belief.resize(num_classes);
-  if (!(normaliser > 0.0)) return Opinion::vacuous(num_classes);  // total conflict: no NaN
+  // 1 - delta equals the total unnormalised mass: summing the numerators avoids computing
+  // 1 - (conflict) by cancellation, which loses all digits near total conflict.
+  double normaliser = m1.uncertainty * m2.uncertainty;
   for (int c = 0; c < num_classes; ++c) {
-    out.belief[c] = (m1.belief[c] * m2.belief[c] + m1.belief[c] * m2.uncertainty +
-                     m2.belief[c] * m1.uncertainty) /
-                    normaliser;
+    out.belief[c] = m1.belief[c] * m2.belief[c] + m1.belief[c] * m2.uncertainty +
+                    m2.belief[c] * m1.uncertainty;
+    normaliser += out.belief[c];
   }
+  if (!(normaliser > 0.0)) return Opinion::vacuous(num_classes);  // total conflict: no NaN
+  for (double& b : out.belief) b /= normaliser;
   out.uncertainty = m1.uncertainty * m2.uncertainty / normaliser;
   return out;
 }
