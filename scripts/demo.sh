@@ -96,13 +96,13 @@ cat <<EOF
 ==== live in rviz (ROS 1)
 Build the catkin workspace once (scripts/test.sh does the same, so if you ran it this is done):
 
-  mkdir -p build/catkin_ws/src && ln -sfn "\$PWD" build/catkin_ws/src/evidential_octomap
-  PATH=/usr/bin:\$PATH catkin_make -C build/catkin_ws -DPYTHON_EXECUTABLE=/usr/bin/python3 \\
+  mkdir -p build/.catkin_ws/src && ln -sfn "\$PWD" build/.catkin_ws/src/evidential_octomap
+  PATH=/usr/bin:\$PATH catkin_make -C build/.catkin_ws -DPYTHON_EXECUTABLE=/usr/bin/python3 \\
       -DCMAKE_BUILD_TYPE=Release -DBUILD_TESTING=OFF -DEVIDENTIAL_OCTOMAP_TOOLS=OFF -j${jobs}
 
 then, in a shell at ${root}:
 
-  source build/catkin_ws/devel/setup.bash
+  source build/.catkin_ws/devel/setup.bash
   roslaunch evidential_octomap demo.launch
 
 which plays ${data} as a live PointCloud2 stream with evidence into evidential_mapping_node and

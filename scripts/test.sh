@@ -4,7 +4,7 @@
 #   1. installs missing Debian packages (scripts/install_deps.sh; a no-op when all are present);
 #   2. core, tools and their tests with plain CMake in build/core (Release), gated on ctest;
 #   3. the catkin package (core + ROS node, messages, rostests) in the workspace
-#      build/catkin_ws (src/evidential_octomap -> this repository), gated on catkin_test_results.
+#      build/.catkin_ws (src/evidential_octomap -> this repository), gated on catkin_test_results.
 #
 # Both builds are incremental, so a second run only re-runs the tests. JOBS=N sets parallelism
 # (default 2). Exits non-zero when anything fails. The last line is always
@@ -21,7 +21,7 @@ export PATH="/usr/bin:/bin:${PATH}"
 jobs="${JOBS:-2}"
 
 core_dir="build/core"
-ws="build/catkin_ws"
+ws="build/.catkin_ws"
 logs="build/logs"
 
 passed=0

@@ -3,7 +3,7 @@
 #   bash src/ros/scripts/rviz_screenshot.sh [out.png]      (default docs/images/rviz_demo.png)
 #   RVIZ=rviz_cfg/demo_semantickitti_uncertainty.rviz bash src/ros/scripts/rviz_screenshot.sh \
 #     docs/images/rviz_demo_uncertainty.png               (the uncertainty view)
-# Needs a built catkin workspace (WS, default build/.catkin_ws or build/catkin_ws), xvfb and
+# Needs a built catkin workspace (WS, default build/.catkin_ws), xvfb and
 # imagemagick.
 # Runs demo.launch under Xvfb with software GL, waits until the map has been published after the
 # last scan (SCANS, default 10), waits WAIT seconds more for rviz to draw, grabs the root window,
@@ -13,7 +13,7 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../.." && pwd)"
 out="${1:-${root}/docs/images/rviz_demo.png}"
 ws="${WS:-}"
 if [[ -z "${ws}" ]]; then
-  for ws in "${root}/build/.catkin_ws" "${root}/build/catkin_ws"; do [[ -d "${ws}/devel" ]] && break; done
+  ws="${root}/build/.catkin_ws"
 fi
 wait_draw="${WAIT:-15}"
 export PATH="/usr/bin:/bin:${PATH}"
