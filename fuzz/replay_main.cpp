@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iostream>
@@ -196,6 +197,10 @@ int main(int argc, char** argv) {
       std::cerr << "unknown argument " << arg << "\n";
       return 2;
     }
+  }
+  // scripts/sanitize.sh shortens the run under sanitizers (EVIDENTIAL_FUZZ_MUTATIONS caps it).
+  if (const char* cap = std::getenv("EVIDENTIAL_FUZZ_MUTATIONS")) {
+    if (std::atol(cap) >= 0) mutations = std::min(mutations, std::atol(cap));
   }
   const bool ot = target == "ot";
   if (!ot && target != "class_table") {

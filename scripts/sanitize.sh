@@ -2,7 +2,8 @@
 # Builds the core and its tests with AddressSanitizer + UndefinedBehaviorSanitizer
 # (-DEVIDENTIAL_OCTOMAP_SANITIZE=ON) in build/sanitize and runs ctest there.
 #   scripts/sanitize.sh [-j N] [ctest arguments...]    e.g. scripts/sanitize.sh -j 2 -R reliability
-# Environment: BUILD_DIR (default build/sanitize), CXX (compiler), SANITIZE_TIMEOUT_SCALE.
+# Environment: BUILD_DIR (default build/sanitize), CXX (compiler); EVIDENTIAL_SOAK_SCANS (100),
+# EVIDENTIAL_FUZZ_MUTATIONS (1000), EVIDENTIAL_KILL_TRIALS (20) shorten the reliability tests.
 # The reliability tests (test/reliability) are part of the run when test/CMakeLists.txt adds
 # them; until then they are built and run standalone in $BUILD_DIR/reliability.
 # Prints one summary line: "sanitize: N tests, F failed" and exits non-zero on any failure.
@@ -19,6 +20,10 @@ export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 # OpenMP runtimes keep thread pools alive at exit; that is not a leak of ours.
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$repo/test/reliability/lsan.supp}"
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-2}"
+# The reliability tests, shortened for the ~3x slower sanitized build (full sizes: plain ctest).
+export EVIDENTIAL_SOAK_SCANS="${EVIDENTIAL_SOAK_SCANS:-100}"
+export EVIDENTIAL_FUZZ_MUTATIONS="${EVIDENTIAL_FUZZ_MUTATIONS:-1000}"
+export EVIDENTIAL_KILL_TRIALS="${EVIDENTIAL_KILL_TRIALS:-20}"
 
 configure() {  # <source> <build>
   cmake -S "$1" -B "$2" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEVIDENTIAL_OCTOMAP_SANITIZE=ON \
