@@ -40,8 +40,8 @@ void runInfo(const std::string& path) {
             << " leaves)\n"
             << "memory:          " << tree->memoryUsage() << " B ("
             << std::fixed << std::setprecision(1) << tree->memoryUsage() / 1048576.0 << " MiB)\n"
-            << std::defaultfloat << "bounds [m]:      (" << x << ", " << y << ", " << z << ") .. ("
-            << X << ", " << Y << ", " << Z << ")\n"
+            << "bounds [m]:      (" << x << ", " << y << ", " << z << ") .. (" << X << ", " << Y
+            << ", " << Z << ")\n" << std::defaultfloat << std::setprecision(6)
             << "parameters:\n";
   std::ostringstream params;
   tree->config().print(params);
