@@ -32,9 +32,12 @@ int main(int argc, char** argv) {
   std::cout << "wall voxel: class " << tree.classNames()[wall.label] << ", uncertainty "
             << wall.uncertainty << " (" << stats.voxels_updated << " voxels updated)\n";
   // ... and the whole OctoMap API still works.
+  const octomap::point3d ground_voxel =
+      tree.keyToCoord(tree.coordToKey(octomap::point3d(2.0f, 0.0f, 0.0f)));
   octomap::point3d hit;
-  const bool found = tree.castRay(origin_W, octomap::point3d(2.0f, 0.0f, -1.5f), hit,
-                                  /*ignoreUnknownCells=*/true);
+  const bool found = tree.castRay(origin_W, ground_voxel - origin_W, hit,
+                                  /*ignoreUnknownCells=*/true) &&
+                     hit.distance(ground_voxel) < tree.getResolution();
   std::cout << "ray hit: " << found << " at " << hit << "\n";
 
   // .ot files come back as our tree through OctoMap's generic reader.

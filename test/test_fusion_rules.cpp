@@ -231,6 +231,7 @@ TEST(DempsterRule, IntegratedScansAgreeWithBeliefSpaceInBothOrders) {
   SemanticConfig config;
   config.uncertainty_threshold = false;  // one point per scan: nothing to drop
   config.ds_multiplier = 0.0;            // keep the point exactly where it is
+  config.kernel_creates_leaves = true;   // the voxel above is unknown space
   EvidentialOcTree probe(0.2, num_classes, config);
   const octomap::OcTreeKey key = probe.coordToKey(octomap::point3d(0.1f, 0.1f, 0.1f));
   const octomap::point3d centre = probe.keyToCoord(key);

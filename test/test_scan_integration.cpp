@@ -539,7 +539,10 @@ TEST(KernelLeafCreation, VoxelsUpdatedCountsTheSemanticLeaves) {
 // Evidence reaching the voxel `offset_cells` voxels above a single point at a voxel centre.
 VoxelOpinion neighbourAfterOnePoint(const SemanticConfig& config,
                                     const std::vector<float>& evidence, int offset_cells) {
-  EvidentialOcTree tree(0.2, static_cast<int>(evidence.size()), config);
+  // The neighbours are unknown space: let the kernel create them so its reach is visible.
+  SemanticConfig densify = config;
+  densify.kernel_creates_leaves = true;
+  EvidentialOcTree tree(0.2, static_cast<int>(evidence.size()), densify);
   const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(0.1f, 0.1f, 0.1f));
   octomap::Pointcloud points;
   points.push_back(tree.keyToCoord(key));

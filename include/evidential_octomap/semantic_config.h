@@ -31,8 +31,11 @@ struct SemanticConfig {
   // Max sensor range [m] for occupancy and semantics; < 0 means unlimited.
   double max_range = -1.0;
   // Let kernel updates create leaves in unknown space (densification, S-BKI style). Created
-  // leaves start at occupancy log-odds 0 (p = 0.5). When false only existing leaves are touched.
-  bool kernel_creates_leaves = true;
+  // leaves start at occupancy log-odds 0 (p = 0.5), which OctoMap reads as occupied. Off by
+  // default: on the bundled sequence it gains little (held-out O.Acc 72.1 vs 71.4 %, mIoU of
+  // covered queries 42.6 vs 42.8 %, reconstruction identical) and puts phantom obstacles in
+  // front of real surfaces for castRay and planners. When false only existing leaves are touched.
+  bool kernel_creates_leaves = false;
   // Insert occupancy through OctoMap's discretized ray casting (one ray per hit voxel).
   bool discretize = true;
   // Threads for the semantic pass (0 = OpenMP default).
