@@ -57,9 +57,9 @@ struct InsertStats {
   size_t points_dropped_uncertain = 0;  // above the percentile threshold
   double uncertainty_threshold = 0.0;   // U_thr of this scan
   size_t voxels_updated = 0;        // leaves that received semantic evidence
-  double ms_occupancy = 0.0;        // ray casting and occupancy update
+  double ms_occupancy = 0.0;        // ray casting (free and occupied keys)
   double ms_kernel = 0.0;           // kernel evaluation and per-voxel aggregation
-  double ms_update = 0.0;           // applying aggregates to leaves, inner nodes, pruning
+  double ms_update = 0.0;           // one tree pass: occupancy + semantics, inner nodes, pruning
 };
 
 class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNode> {
