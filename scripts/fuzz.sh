@@ -45,7 +45,9 @@ fi
 
 echo "fuzz.sh: libFuzzer $target for $seconds s (corpus $corpus)"
 set +e
-"$build/fuzz_$target" -max_total_time="$seconds" -max_len=32768 -timeout=20 -rss_limit_mb=2048 \
+binary="$build/fuzz_$target"
+[[ "$target" == ot ]] && binary="$build/fuzz_ot_reader"
+"$binary" -max_total_time="$seconds" -max_len=32768 -timeout=20 -rss_limit_mb=2048 \
   -close_fd_mask=2 -print_final_stats=1 -artifact_prefix="$build/artifacts/" "$@" "$corpus" \
   >"$build/fuzz_$target.log" 2>&1
 rc=$?
