@@ -5,6 +5,7 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/octomap.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -591,6 +592,21 @@ TEST(AtomicSave, SuccessfulSaveLeavesOnlyTheTarget) {
   saveMap(*makeMap("dempster", 1), dir.file("map.ot"));  // overwrite
   saveBinaryOccupancy(*smallMap(), dir.file("map.bt"));
   EXPECT_EQ(dir.entries(), (std::set<std::string>{"map.ot", "map.bt"}));
+}
+
+TEST(AtomicSave, TemporaryOfAKilledWriterIsRemovedByTheNextSave) {
+  TempDir dir;
+  // A pid that no longer exists: a child that has exited and been reaped.
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  ASSERT_GT(child, 0);
+  ASSERT_EQ(::waitpid(child, nullptr, 0), child);
+  const std::string stale = "map.ot.tmp." + std::to_string(child);
+  const std::string live = "map.ot.tmp." + std::to_string(::getppid());  // a running process
+  std::ofstream(dir.file(stale)) << "torn";
+  std::ofstream(dir.file(live)) << "in progress";
+  saveMap(*smallMap(), dir.file("map.ot"));
+  EXPECT_EQ(dir.entries(), (std::set<std::string>{"map.ot", live}));
 }
 
 TEST(AtomicSave, MissingDirectoryThrowsAndLeavesNoTempFile) {

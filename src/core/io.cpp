@@ -1,11 +1,13 @@
 #include "evidential_octomap/io.h"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iomanip>
@@ -16,6 +18,29 @@
 
 namespace evidential_octomap {
 namespace {
+
+// Removes `<path>.tmp.<pid>` files left by writers that were killed mid-save (their pid is gone).
+void removeStaleTemporaries(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  const std::string prefix = target.filename().string() + ".tmp.";
+  try {  // best effort: the save itself has already succeeded
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string pid_text = name.substr(prefix.size());
+    if (pid_text.empty() || pid_text.size() > 9 ||
+        pid_text.find_first_not_of("0123456789") != std::string::npos) {
+      continue;
+    }
+    const long pid = std::stol(pid_text);
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) fs::remove(entry.path(), ec);
+  }
+  } catch (const fs::filesystem_error&) {
+  }
+}
 
 // Writes through `write` into a temporary file beside `path`, fsyncs and renames it over `path`.
 void writeAtomically(const std::string& path, const std::function<bool(std::ostream&)>& write) {
@@ -42,6 +67,7 @@ void writeAtomically(const std::string& path, const std::function<bool(std::ostr
     std::remove(temp.c_str());
     throw std::runtime_error("cannot replace " + path + ": " + why);
   }
+  removeStaleTemporaries(path);
 }
 
 }  // namespace

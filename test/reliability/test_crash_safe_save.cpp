@@ -211,7 +211,7 @@ TEST(CrashSafeSave, KillMinus9DuringSaveLeavesOldOrNewFile) {
             << "/" << trials << " (map A " << saw_a << ", map B " << saw_b << "); " << total_saves
             << " saves completed by the children; killed while a temp file existed in "
             << killed_mid_write << " trials; leftover temp files " << leftover_temps
-            << " (named <path>.tmp.<pid>, not cleaned by the library)\n";
+            << " (named <path>.tmp.<pid>; the next save of the path removes them)\n";
   RecordProperty("kill_trials", trials);
   RecordProperty("intact", old_or_new);
   RecordProperty("leftover_temps", static_cast<int>(leftover_temps));
