@@ -228,10 +228,7 @@ void runCompare(const CompareOptions& o) {
       const ClassTable rtable = ClassTable::load(rclasses);
       const Dataset rset = Dataset::open(rdata, rtable);
       std::vector<Scan> rscans = loadScans(rset, 0, !o.quiet);
-      for (Scan& s : rscans) {
-        s.predicted = syntheticPredictions(s.points_S, s.gt, rtable.numClasses(),
-                                           rtable.ignore_class, o.noise);
-      }
+      useSyntheticPredictions(&rscans, rtable, o.noise);
       std::vector<std::string> rsources;
       for (const auto& s : o.sources)
         if (s != "confusion" && s != "file") rsources.push_back(s);

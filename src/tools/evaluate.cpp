@@ -33,11 +33,7 @@ void runEval(const EvalOptions& o) {
   std::vector<Scan> scans = loadScans(dataset, o.scans, true);
   std::string predictions_note;
   if (o.synthetic) {
-    for (Scan& s : scans) {
-      s.predicted = syntheticPredictions(s.points_S, s.gt, classes.numClasses(),
-                                         classes.ignore_class, o.noise);
-    }
-    predictions_note = o.noise.describe();
+    predictions_note = useSyntheticPredictions(&scans, classes, o.noise);
   } else if (!dataset.hasPredictions()) {
     predictions_note = "none in the dataset (input metrics count every query as unlabelled)";
   }

@@ -42,13 +42,7 @@ void runMap(const MapOptions& o) {
   }
   std::vector<Scan> scans = loadScans(dataset, o.scans, !o.quiet);
   std::string predictions_note;
-  if (o.synthetic) {
-    for (Scan& s : scans) {
-      s.predicted = syntheticPredictions(s.points_S, s.gt, classes.numClasses(),
-                                         classes.ignore_class, o.noise);
-    }
-    predictions_note = o.noise.describe();
-  }
+  if (o.synthetic) predictions_note = useSyntheticPredictions(&scans, classes, o.noise);
   const Protocol protocol = makeProtocol(o.protocol, scans.size());
   const auto evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes);
   MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,

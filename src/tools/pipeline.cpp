@@ -9,6 +9,15 @@
 
 namespace evidential_octomap::tools {
 
+std::string useSyntheticPredictions(std::vector<Scan>* scans, const ClassTable& classes,
+                                    const NoiseModel& noise) {
+  for (Scan& s : *scans) {
+    s.predicted = syntheticPredictions(s.points_S, s.gt, classes.numClasses(),
+                                       classes.ignore_class, noise);
+  }
+  return noise.describe();
+}
+
 Protocol makeProtocol(const std::string& name, size_t num_scans) {
   Protocol p;
   p.name = name;

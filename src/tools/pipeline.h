@@ -8,6 +8,7 @@
 
 #include "dataset.h"
 #include "evidence_sources.h"
+#include "synthetic.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/metrics.h"
@@ -23,6 +24,11 @@ struct Protocol {
   std::vector<size_t> map_scans;
   std::vector<size_t> query_scans;
 };
+// Replaces every scan's predictions by its GT corrupted with `noise` (SYNTHETIC predictions);
+// returns the description to print beside the results.
+std::string useSyntheticPredictions(std::vector<Scan>* scans, const ClassTable& classes,
+                                    const NoiseModel& noise);
+
 Protocol makeProtocol(const std::string& name, size_t num_scans);  // throws std::invalid_argument
 
 // Loads scans 0..n-1 of the dataset (n = min(limit, size), limit 0 = all), with a progress bar.
