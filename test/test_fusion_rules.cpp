@@ -150,6 +150,78 @@ TEST(DempsterRule, ContributionMatchesHandComputation) {
   EXPECT_NEAR(inc[0], std::log(2.0) + std::log1p(1.0 / 3.0), 1e-12);
 }
 
+TEST(DempsterRule, KernelAboveOneIsClampedToTheFullOpinion) {
+  // sigma0 > 1 can give k > 1; the extended belief k b is an opinion only for k <= 1, so the
+  // rule uses k = 1: e = (2, 0), C = 2 gives log1p(b/u) = ln 2 at k = 1, 2 and 7.
+  const auto rule = FusionRule::create("dempster");
+  std::vector<float> e{2.0f, 0.0f};
+  for (double k : {1.0, 2.0, 7.0}) {
+    std::vector<double> inc(2, 0.0);
+    rule->contribute(pointOpinion(e), k, 2, inc.data());
+    EXPECT_NEAR(inc[0], std::log(2.0), 1e-12) << "k = " << k;
+    EXPECT_EQ(inc[1], 0.0);
+  }
+}
+
+TEST(DempsterRule, ConflictOfHandComputedPayloads) {
+  const auto rule = FusionRule::create("dempster");
+  // One class only: -ln u = ln(e^2) = 2 = sum L, no conflict.
+  const std::vector<float> one{2.0f, 0.0f, 0.0f};
+  EXPECT_NEAR(rule->readout(one.data(), 3).conflict, 0.0, 1e-6);
+  // L = (1, 1): 1/u = 2e - 1, conflict = 1 - ln(2e - 1) / 2.
+  const std::vector<float> two{1.0f, 1.0f};
+  EXPECT_NEAR(rule->readout(two.data(), 2).conflict, 1.0 - std::log(2 * std::exp(1.0) - 1) / 2,
+              1e-6);
+  // Vacuous: no evidence, no conflict.
+  const std::vector<float> none{0.0f, 0.0f};
+  EXPECT_EQ(rule->readout(none.data(), 2).conflict, 0.0f);
+}
+
+TEST(DempsterRule, ConflictIsTheAccumulatedDempsterConflictOfOneHotInputs) {
+  // Sequential belief-space fusion in long double: the normaliser of each step is
+  // 1 - delta = 1 - sum_{i != j} b1^i b2^j (reference_dempster.h). The map's conflict times the
+  // log-evidence brought in must equal -sum ln(1 - delta).
+  const int num_classes = 3;
+  RandomMasses rnd(41);
+  const auto rule = FusionRule::create("dempster");
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<float> payload(num_classes, 0.0f);
+    test::RefOpinion fused = test::refVacuous(num_classes);
+    long double lost = 0.0L;
+    for (int i = 0; i < 12; ++i) {
+      std::vector<float> e(num_classes, 0.0f);
+      e[size_t(rnd.uniform(0.0, 1.0) < 0.7 ? 0 : 1 + (i % 2))] = float(rnd.uniform(0.5, 10.0));
+      const double k = rnd.uniform(0.2, 1.0);
+      fuse(*rule, e, k, payload.data());
+      const test::RefOpinion m = test::refExtend(test::refFromEvidence(e), k);
+      long double delta = 0.0L;
+      for (int a = 0; a < num_classes; ++a)
+        for (int b = 0; b < num_classes; ++b)
+          if (a != b) delta += fused.belief[a] * m.belief[b];
+      lost -= std::log(1.0L - delta);
+      fused = test::refCombine(fused, m);
+    }
+    double total = 0.0;
+    for (float l : payload) total += l;
+    const VoxelOpinion voxel = rule->readout(payload.data(), num_classes);
+    EXPECT_NEAR(voxel.conflict * total, double(lost), 1e-4 * total) << "trial " << trial;
+  }
+}
+
+TEST(DirichletRules, ConflictIsTheShareOfCountsOffTheLabel) {
+  for (const std::string name : {"sbki", "ebs"}) {
+    const auto rule = FusionRule::create(name);
+    const float prior = rule->prior();
+    // Added counts (3, 1, 0): label 0, conflict 1 / 4.
+    const std::vector<float> alpha{prior + 3.0f, prior + 1.0f, prior};
+    const VoxelOpinion v = rule->readout(alpha.data(), 3);
+    EXPECT_EQ(v.label, 0) << name;
+    EXPECT_NEAR(v.conflict, 0.25, 1e-6) << name;
+    const std::vector<float> untouched(3, prior);
+    EXPECT_EQ(rule->readout(untouched.data(), 3).conflict, 0.0f) << name;
+  }
+}
+
 TEST(DempsterRule, ReadoutOfHandComputedPayload) {
   const auto rule = FusionRule::create("dempster");
   // L = (ln 3, ln 2, 0): u = 1 / (3 + 2 + 1 - 3 + 1) = 1/4, b = (2/4, 1/4, 0).
@@ -237,8 +309,10 @@ TEST(DempsterRule, IntegratedScansAgreeWithBeliefSpaceInBothOrders) {
   const octomap::point3d centre = probe.keyToCoord(key);
   const octomap::OcTreeKey above_key(key[0], key[1], key[2] + 1);
   const octomap::point3d above = probe.keyToCoord(above_key);  // 0.2 m above, off the ray
-  const double d_above = (above - centre).norm();
-  ASSERT_NEAR(d_above, 0.2, 1e-6);
+  ASSERT_NEAR((above - centre).norm(), 0.2, 1e-6);
+  // kernel_distance "voxel": from the point (the own voxel's centre) to the cube above is half
+  // a voxel; "centre": the 0.2 m between the centres.
+  const double d_above = config.kernel_distance == "voxel" ? 0.1 : 0.2;
 
   std::vector<std::vector<float>> evidence;
   for (int i = 0; i < 6; ++i) evidence.push_back(rnd.evidence(num_classes, 3.0));

@@ -47,17 +47,23 @@ TEST(SparseKernel, ZeroAtAndBeyondSupport) {
   EXPECT_LT(inside, 1e-6);
 }
 
-TEST(SparseKernel, IsClampedToUnitIntervalForLargeSigma0) {
-  // sigma0 = 2: raw value 2 at d = 0, clamped to 1; at d = L/2 it is 2/6 = 1/3 (below the clamp).
-  EXPECT_EQ(sparseKernel(0.0, 0.3, 2.0), 1.0);
+TEST(SparseKernel, IsNotClampedSigma0ScalesIt) {
+  // The clamp to [0, 1] belongs to the dempster rule's extended belief, not to the kernel that
+  // sbki and ebs share: sigma0 = 2 gives 2 at d = 0 and 2/6 at d = L/2.
+  EXPECT_EQ(sparseKernel(0.0, 0.3, 2.0), 2.0);
   EXPECT_NEAR(sparseKernel(0.15, 0.3, 2.0), 1.0 / 3.0, 1e-12);
-  // d = L/4 with sigma0 = 3: 3 * 0.659... > 1, clamped.
-  EXPECT_EQ(sparseKernel(0.075, 0.3, 3.0), 1.0);
+  EXPECT_NEAR(sparseKernel(0.075, 0.3, 3.0), 3.0 * (0.5 + 1.0 / (2 * kPi)), 1e-12);
   for (double d = 0.0; d < 0.35; d += 0.001) {
-    const double k = sparseKernel(d, 0.3, 4.0);
-    ASSERT_GE(k, 0.0) << "d = " << d;
-    ASSERT_LE(k, 1.0) << "d = " << d;
+    ASSERT_GE(sparseKernel(d, 0.3, 4.0), 0.0) << "d = " << d;
   }
+}
+
+TEST(DistanceToCube, ZeroInsideAndEuclideanOutside) {
+  EXPECT_EQ(distanceToCube(0.0, 0.0, 0.0, 0.1), 0.0);
+  EXPECT_EQ(distanceToCube(0.09, -0.1, 0.05, 0.1), 0.0);        // inside or on the faces
+  EXPECT_NEAR(distanceToCube(0.3, 0.0, 0.0, 0.1), 0.2, 1e-12);  // beyond one face
+  EXPECT_NEAR(distanceToCube(-0.2, 0.2, 0.0, 0.1), std::sqrt(0.02), 1e-12);  // beyond an edge
+  EXPECT_NEAR(distanceToCube(0.2, 0.2, -0.2, 0.1), std::sqrt(0.03), 1e-12);  // beyond a corner
 }
 
 TEST(SparseKernel, DecreasesMonotonicallyInsideSupport) {

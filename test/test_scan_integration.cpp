@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <memory>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/io.h"
 #include "evidential_octomap/scan_integrator.h"
 #include "synthetic_scene.h"
 #include "tree_compare.h"
@@ -550,34 +552,40 @@ VoxelOpinion neighbourAfterOnePoint(const SemanticConfig& config,
   return tree.query(octomap::OcTreeKey(key[0], key[1], key[2] + offset_cells));
 }
 
+// With kernel_distance "voxel" (the default) the point, at its voxel's centre, is
+// 0.2 n - 0.1 m from the cube n voxels above.
 TEST(KernelSettings, UncertainPointsHaveShortSupportUnlessReferenceCompat) {
-  // e = (0.2, 0, 0): u = 3 / 3.2. Adaptive: L = 0.3 e^{1 - 3 u} ~ 0.05 m, no neighbour.
-  // reference_compat (gamma = 0): L = 0.3 e ~ 0.82 m, so the voxel 0.6 m above gets evidence.
+  // e = (0.2, 0, 0): u = 3 / 3.2. Adaptive: L = 0.3 e^{1 - 3 u} ~ 0.049 m, no neighbour.
+  // reference_compat (gamma = 0): L = 0.3 e ~ 0.815 m: 0.5 m (3 above) in, 0.9 m (5 above) out.
   const std::vector<float> weak{0.2f, 0.0f, 0.0f};
   SemanticConfig adaptive, compat;
   adaptive.uncertainty_threshold = compat.uncertainty_threshold = false;
   adaptive.ds_multiplier = compat.ds_multiplier = 0.0;
   compat.reference_compat = true;
   EXPECT_EQ(compat.effectiveGamma(), 0.0);
+  EXPECT_EQ(compat.effectiveDownsampling(), "count_cap");
   EXPECT_EQ(neighbourAfterOnePoint(adaptive, weak, 1).label, -1);
   EXPECT_EQ(neighbourAfterOnePoint(compat, weak, 3).label, 0);
-  EXPECT_EQ(neighbourAfterOnePoint(compat, weak, 5).label, -1);  // 1.0 m > 0.82 m
+  EXPECT_EQ(neighbourAfterOnePoint(compat, weak, 5).label, -1);
 }
 
-TEST(KernelSettings, FixedLengthWhenAdaptiveLengthIsOff) {
-  // adaptive_length = false: L = l = 0.3 m for every point, certain or not.
+TEST(KernelSettings, NoAdaptiveLengthIsThePapersGammaZero) {
+  // adaptive_length = false is the paper's gamma = 0: L = l beta e = 0.815 m for every point,
+  // certain or not: 0.7 m (4 above) in, 0.9 m (5 above) out.
   SemanticConfig fixed;
   fixed.adaptive_length = false;
   fixed.uncertainty_threshold = false;
   fixed.ds_multiplier = 0.0;
+  EXPECT_EQ(fixed.effectiveGamma(), 0.0);
   const std::vector<float> certain{50.0f, 0.0f, 0.0f}, weak{0.2f, 0.0f, 0.0f};
-  EXPECT_EQ(neighbourAfterOnePoint(fixed, certain, 1).label, 0);
-  EXPECT_EQ(neighbourAfterOnePoint(fixed, weak, 1).label, 0);
-  EXPECT_EQ(neighbourAfterOnePoint(fixed, certain, 2).label, -1);  // 0.4 m > 0.3 m
-  // With the adaptive length a certain point reaches further: 0.3 e^{1 - 3/53} ~ 0.77 m.
+  EXPECT_EQ(neighbourAfterOnePoint(fixed, certain, 4).label, 0);
+  EXPECT_EQ(neighbourAfterOnePoint(fixed, weak, 4).label, 0);
+  EXPECT_EQ(neighbourAfterOnePoint(fixed, certain, 5).label, -1);
+  // Adaptive: the certain point reaches 0.3 e^{1 - 9/53} ~ 0.688 m: 0.5 m in, 0.7 m out.
   SemanticConfig adaptive = fixed;
   adaptive.adaptive_length = true;
   EXPECT_EQ(neighbourAfterOnePoint(adaptive, certain, 3).label, 0);
+  EXPECT_EQ(neighbourAfterOnePoint(adaptive, certain, 4).label, -1);
 }
 
 TEST(KernelSettings, SbkiUsesThePlainKernelOnTheArgmax) {
@@ -587,14 +595,51 @@ TEST(KernelSettings, SbkiUsesThePlainKernelOnTheArgmax) {
   sbki.ds_multiplier = 0.0;
   const std::vector<float> e{0.0f, 0.3f, 0.1f};  // uncertain, argmax 1
   const VoxelOpinion above = neighbourAfterOnePoint(sbki, e, 1);
-  // k'(0.2, 0.3, 1) = (2 + cos(4 pi / 3))/3 (1/3) + sin(4 pi / 3) / (2 pi)
+  // d = 0.1 m to the cube above: k'(0.1, 0.3, 1) = (2 + cos(2 pi / 3))/3 (2/3) + sin(2 pi / 3) / (2
+  // pi)
   const double pi = 3.14159265358979323846;
-  const double k = (2 + std::cos(4 * pi / 3)) / 3 / 3 + std::sin(4 * pi / 3) / (2 * pi);
+  const double k = (2 + std::cos(2 * pi / 3)) / 3 * 2 / 3 + std::sin(2 * pi / 3) / (2 * pi);
   const double prior = sbki.sbki_prior;
   const double s = 3 * prior + k;
   EXPECT_EQ(above.label, 1);
   EXPECT_NEAR(above.belief[1], (prior + k) / s, 1e-5);
   EXPECT_NEAR(above.belief[0], prior / s, 1e-5);
+}
+
+TEST(KernelSettings, SbkiCountsScaleWithSigma0AboveOne) {
+  // The kernel is not clamped for the Dirichlet rules: sigma0 = 3 adds 3 k' to the count.
+  SemanticConfig sbki;
+  sbki.rule = "sbki";
+  sbki.ds_multiplier = 0.0;
+  sbki.sigma0 = 3.0;
+  const std::vector<float> e{0.0f, 0.3f, 0.1f};
+  const VoxelOpinion above = neighbourAfterOnePoint(sbki, e, 1);
+  const double pi = 3.14159265358979323846;
+  const double k = 3.0 * ((2 + std::cos(2 * pi / 3)) / 3 * 2 / 3 + std::sin(2 * pi / 3) / (2 * pi));
+  ASSERT_GT(k, 1.0);
+  const double prior = sbki.sbki_prior;
+  EXPECT_NEAR(above.belief[1], (prior + k) / (3 * prior + k), 1e-5);
+}
+
+TEST(KernelSettings, PointAlwaysReachesItsOwnVoxel) {
+  // A weak point (u = 3 / 3.2, L ~ 0.049 m) near the corner of its voxel [0, 0.2]^3: 0.156 m
+  // from the centre. Measured to the voxel's cube it is inside (d = 0, k = 1), so the voxel
+  // holds exactly the point's opinion; measured to the centre it gets nothing.
+  const std::vector<float> weak{0.2f, 0.0f, 0.0f};
+  octomap::Pointcloud points;
+  points.push_back(0.01f, 0.01f, 0.01f);
+  SemanticConfig voxel, centre;
+  voxel.ds_multiplier = centre.ds_multiplier = 0.0;
+  voxel.uncertainty_threshold = centre.uncertainty_threshold = false;
+  centre.kernel_distance = "centre";
+  EvidentialOcTree by_voxel(0.2, 3, voxel), by_centre(0.2, 3, centre);
+  by_voxel.insertSemanticScan(points, weak, octomap::point3d(-2.9f, 0.1f, 0.1f));
+  by_centre.insertSemanticScan(points, weak, octomap::point3d(-2.9f, 0.1f, 0.1f));
+  const VoxelOpinion own = by_voxel.query(octomap::point3d(0.1f, 0.1f, 0.1f));
+  EXPECT_EQ(own.label, 0);
+  EXPECT_NEAR(own.belief[0], 0.2 / 3.2, 1e-6);  // b = e / S
+  EXPECT_NEAR(own.uncertainty, 3.0 / 3.2, 1e-6);
+  EXPECT_EQ(by_centre.query(octomap::point3d(0.1f, 0.1f, 0.1f)).label, -1);
 }
 
 TEST(ScanIntegration, DownSamplingMergesPointsOfOneCell) {
@@ -620,6 +665,72 @@ TEST(ScanIntegration, DownSamplingMergesPointsOfOneCell) {
   EXPECT_EQ(
       all.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f)).semantic_points,
       11u);
+}
+
+TEST(ScanIntegration, CountCapKeepsDsMultiplierPlusOnePointsPerBlock) {
+  // count_cap, ds_multiplier 5: at most 6 points per block of 2 x 2 x 2 voxels (0.4 m at 0.2 m).
+  // Ten points in the block [2.0, 2.4) x [0, 0.4) x [0, 0.4), three in the next block up.
+  SemanticConfig config;
+  config.downsampling = "count_cap";
+  config.uncertainty_threshold = false;
+  EvidentialOcTree tree(0.2, 2, config);
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  for (int i = 0; i < 10; ++i) {
+    points.push_back(2.05f + 0.03f * i, 0.1f, 0.1f);
+    evidence.insert(evidence.end(), {3.0f, 1.0f});
+  }
+  for (int i = 0; i < 3; ++i) {
+    points.push_back(2.1f, 0.1f, 0.45f + 0.1f * i);
+    evidence.insert(evidence.end(), {1.0f, 3.0f});
+  }
+  const InsertStats stats =
+      tree.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f));
+  EXPECT_EQ(stats.semantic_points, 6u + 3u);
+  // The first six of the row were kept: the voxel of the 7th to 10th (x in [2.2, 2.4)) holds
+  // only kernel evidence from its neighbours, the voxel of the first ones their own.
+  SemanticConfig average = config;
+  average.downsampling = "average";
+  average.ds_multiplier = 0.0;
+  EvidentialOcTree all(0.2, 2, average);
+  EXPECT_EQ(
+      all.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f)).semantic_points,
+      13u);
+  // ds_multiplier <= 0 switches the cap off too.
+  SemanticConfig off = config;
+  off.ds_multiplier = 0.0;
+  EvidentialOcTree uncapped(0.2, 2, off);
+  EXPECT_EQ(uncapped.insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.1f))
+                .semantic_points,
+            13u);
+}
+
+TEST(ScanIntegration, HugeEvidenceInOneCellStaysFiniteAndLoadable) {
+  // Issue 16 item 1: two points with evidence 3e38 (finite floats) in one down-sampling cell.
+  // A float sum overflows to inf, the voxel's payload becomes NaN, reads as "no label" and the
+  // saved file cannot be loaded. Summed in double, the mean is 3e38 and the voxel is class 0.
+  for (const std::string mode : {"average", "count_cap"}) {
+    SemanticConfig config;
+    config.downsampling = mode;
+    config.uncertainty_threshold = false;
+    EvidentialOcTree tree(0.2, 3, config);
+    octomap::Pointcloud points;
+    points.push_back(2.101f, 1.001f, 0.501f);
+    points.push_back(2.102f, 1.002f, 0.502f);  // same 0.04 m cell
+    const std::vector<float> evidence{3e38f, 0.0f, 0.0f, 3e38f, 0.0f, 0.0f};
+    tree.insertSemanticScan(points, evidence, octomap::point3d(0.f, 0.f, 0.5f));
+    const EvidentialOcTreeNode* node = tree.search(octomap::point3d(2.1f, 1.0f, 0.5f));
+    ASSERT_NE(node, nullptr);
+    const float* payload = tree.payload(node);
+    ASSERT_NE(payload, nullptr) << mode;
+    for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(payload[c])) << mode << " class " << c;
+    EXPECT_EQ(tree.query(octomap::point3d(2.1f, 1.0f, 0.5f)).label, 0) << mode;
+    const std::string path = ::testing::TempDir() + "/huge_evidence_" + mode + ".ot";
+    saveMap(tree, path);
+    const auto loaded = loadMap(path);
+    EXPECT_EQ(loaded->query(octomap::point3d(2.1f, 1.0f, 0.5f)).label, 0) << mode;
+    std::remove(path.c_str());
+  }
 }
 
 TEST(ScanIntegration, InvalidOriginThrowsAndChangesNothing) {
@@ -651,7 +762,8 @@ TEST(PercentileThreshold, DropsTheMostUncertainPsiPercent) {
     EvidentialOcTree tree(0.2, num_classes, config);
     const InsertStats stats = tree.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
     const size_t n = scan.points_W.size();
-    ASSERT_EQ(stats.semantic_points, n);
+    // The threshold acts on the scan's points first; the kept ones take part in the kernel pass.
+    ASSERT_EQ(stats.semantic_points + stats.points_dropped_uncertain, n);
     // u_i = C / (sum e + C), computed here from the evidence.
     std::vector<double> u(n);
     for (size_t i = 0; i < n; ++i) {

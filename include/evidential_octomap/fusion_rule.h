@@ -26,9 +26,16 @@ struct PointOpinion {
 
 // What a voxel says when read back.
 struct VoxelOpinion {
-  int label = -1;            // argmax class; -1 when the voxel has no semantic evidence
-  float uncertainty = 1.0f;  // dempster: mass u in (0, 1]; sbki/ebs: Dirichlet variance of label
-  std::vector<float> belief; // dempster: belief masses b^c; sbki/ebs: expected probabilities
+  int label = -1;             // argmax class; -1 when the voxel has no semantic evidence
+  float uncertainty = 1.0f;   // dempster: mass u in (0, 1]; sbki/ebs: Dirichlet variance of label
+  std::vector<float> belief;  // dempster: belief masses b^c; sbki/ebs: expected probabilities
+  // Conflict in [0, 1): how much of the evidence fused into the voxel disagreed, 0 when it all
+  // supports one class (or there is none).
+  //   dempster: 1 + ln(u) / sum_c L^c, the share of the fused log-evidence that Dempster's
+  //             normalisation discarded (for one-hot inputs exactly the accumulated conflict
+  //             -sum ln(1 - delta) over all fusions, divided by the log-evidence brought in);
+  //   sbki/ebs: the share of the added counts sum(alpha - prior) not on the label.
+  float conflict = 0.0f;
 };
 
 class FusionRule {

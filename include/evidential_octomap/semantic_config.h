@@ -18,16 +18,28 @@ struct SemanticConfig {
   // Percentage of the most uncertain points of each scan that are dropped (psi).
   double drop_percent = 10.0;
   // Ablation switches (the paper's Table II): adaptive support length, percentile threshold.
+  // Without the adaptive length the support is the paper's gamma = 0 case, l * beta * e.
   bool adaptive_length = true;
   bool uncertainty_threshold = true;
-  // What the authors' released code does: gamma = 0, so the support is l * beta * e.
+  // The authors' released configuration: adaptive length commented out (gamma = 0, support
+  // l * beta * e) and count-cap down-sampling. Not the paper's method; kept to set our numbers
+  // beside theirs.
   bool reference_compat = false;
   // Prior alpha of S-BKI.
   float sbki_prior = 0.001f;
 
-  // Input down-sampling for the semantic pass: voxel grid of resolution / ds_multiplier
-  // (<= 0 disables it). Occupancy always uses every point.
+  // Input down-sampling for the semantic pass (occupancy always uses every point), after the
+  // percentile threshold; ds_multiplier <= 0 disables it.
+  //   "average":   points and evidence averaged per cell of a grid of resolution / ds_multiplier;
+  //   "count_cap": the authors' rule, at most ds_multiplier + 1 points (the first ones) per
+  //                block cell of 2 x 2 x 2 voxels, which bounds the evidence a voxel gets per scan.
+  std::string downsampling = "average";
   double ds_multiplier = 5.0;
+  // How far a point is from a voxel for the kernel:
+  //   "voxel":  distance to the nearest point of the voxel's cube, so a point always gives its
+  //             own voxel the full weight k = sigma0 (clamped to 1 by dempster);
+  //   "centre": distance to the voxel centre (a short support can then miss the own voxel).
+  std::string kernel_distance = "voxel";
   // Max sensor range [m] for occupancy and semantics; < 0 means unlimited.
   double max_range = -1.0;
   // Let kernel updates create leaves in unknown space (densification, S-BKI style). Created
@@ -41,8 +53,10 @@ struct SemanticConfig {
   // Threads for the semantic pass (0 = OpenMP default).
   int threads = 0;
 
-  // The gamma that is actually used (reference_compat forces 0).
-  double effectiveGamma() const { return reference_compat ? 0.0 : gamma; }
+  // The gamma that is actually used (0 without the adaptive length and under reference_compat).
+  double effectiveGamma() const { return reference_compat || !adaptive_length ? 0.0 : gamma; }
+  // The down-sampling that is actually used (reference_compat forces "count_cap").
+  const std::string& effectiveDownsampling() const;
   void print(std::ostream& out) const;
 };
 

@@ -113,6 +113,14 @@ void EvidentialOcTree::setConfig(const SemanticConfig& config) {
         "semantic config out of range: need length_scale, beta, sigma0, sbki_prior > 0, "
         "finite gamma and drop_percent in [0, 100)");
   }
+  if (config.downsampling != "average" && config.downsampling != "count_cap") {
+    throw std::invalid_argument("semantic config: downsampling must be 'average' or 'count_cap', got '" +
+                                config.downsampling + "'");
+  }
+  if (config.kernel_distance != "voxel" && config.kernel_distance != "centre") {
+    throw std::invalid_argument("semantic config: kernel_distance must be 'voxel' or 'centre', got '" +
+                                config.kernel_distance + "'");
+  }
   const bool meaning_changes = config.rule != config_.rule || config.sbki_prior != config_.sbki_prior;
   if (rule_ && meaning_changes && payload_count_ > 0) {
     throw std::logic_error("cannot change the fusion rule of a map that holds semantic evidence ('" +

@@ -1,6 +1,7 @@
 // The three fusion rules behind FusionRule (see fusion_rule.h for what each payload holds).
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 
 #include "evidential_octomap/fusion_rule.h"
@@ -31,8 +32,11 @@ class DempsterRule : public FusionRule {
   void contribute(const PointOpinion& point, double k, int num_classes,
                   double* increments) const override {
     if (k <= 0.0) return;
-    // Extended belief b~ = k b, u~ = 1 - k (1 - u); e_hat / C = b~ / u~ = k e / (S - k (S - C)).
-    const double factor = k / (point.strength - k * (point.strength - num_classes));
+    // The extended belief is an opinion only for k in [0, 1] (sigma0 > 1 can exceed 1).
+    k = std::min(k, 1.0);
+    // Extended belief b~ = k b, u~ = 1 - k (1 - u); e_hat / C = b~ / u~ = k e / (S (1 - k) + k C),
+    // written so that huge S (evidence near FLT_MAX) does not cancel to 0 at k = 1.
+    const double factor = k / (point.strength * (1.0 - k) + k * num_classes);
     for (int c = 0; c < num_classes; ++c) {
       const float e = point.evidence[c];
       if (e > 0.0f) increments[c] += std::log1p(e * factor);
@@ -56,6 +60,10 @@ class DempsterRule : public FusionRule {
     for (int c = 0; c < num_classes; ++c) out.belief[c] = float(out.belief[c] / denominator);
     out.uncertainty = static_cast<float>(scale / denominator);
     out.label = argmaxAbove(payload, num_classes, 0.0f);
+    // -ln u = m + ln(denominator): the log-evidence the fused opinion kept.
+    const double total = std::accumulate(payload, payload + num_classes, 0.0);
+    out.conflict =
+        static_cast<float>(std::clamp(1.0 - (m + std::log(denominator)) / total, 0.0, 1.0));
     return out;
   }
 };
@@ -74,6 +82,11 @@ class DirichletRule : public FusionRule {
     for (int c = 0; c < num_classes; ++c) strength += alpha[c];
     for (int c = 0; c < num_classes; ++c) out.belief[c] = float(alpha[c] / strength);
     out.label = argmaxAbove(alpha, num_classes, prior_);
+    const double added = strength - num_classes * double(prior_);
+    if (out.label >= 0 && added > 0.0) {
+      out.conflict =
+          static_cast<float>(std::clamp(1.0 - (alpha[out.label] - prior_) / added, 0.0, 1.0));
+    }
     if (out.label < 0) {
       out.uncertainty = float(1.0 / num_classes * (1.0 - 1.0 / num_classes) / (strength + 1.0));
       return out;
@@ -122,9 +135,12 @@ FusionRuleType fusionRuleFromName(const std::string& name) {
 
 std::unique_ptr<FusionRule> FusionRule::create(FusionRuleType type, float sbki_prior) {
   switch (type) {
-    case FusionRuleType::kDempster: return std::make_unique<DempsterRule>();
-    case FusionRuleType::kSbki: return std::make_unique<SbkiRule>(sbki_prior);
-    case FusionRuleType::kEbs: return std::make_unique<EbsRule>();
+    case FusionRuleType::kDempster:
+      return std::make_unique<DempsterRule>();
+    case FusionRuleType::kSbki:
+      return std::make_unique<SbkiRule>(sbki_prior);
+    case FusionRuleType::kEbs:
+      return std::make_unique<EbsRule>();
   }
   throw std::invalid_argument("unknown fusion rule type");
 }

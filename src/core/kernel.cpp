@@ -12,11 +12,18 @@ double sparseKernel(double distance, double length, double sigma0) {
   const double r = distance / length;
   const double value =
       sigma0 * ((2.0 + std::cos(kTwoPi * r)) / 3.0 * (1.0 - r) + std::sin(kTwoPi * r) / kTwoPi);
-  return std::clamp(value, 0.0, 1.0);
+  return std::max(value, 0.0);  // k' >= 0 on [0, L); rounding near d = L can dip below
 }
 
 double adaptiveLength(double length_scale, double beta, double gamma, double uncertainty) {
   return length_scale * beta * std::exp(1.0 - gamma * uncertainty);
+}
+
+double distanceToCube(double dx, double dy, double dz, double half_size) {
+  const double x = std::max(std::fabs(dx) - half_size, 0.0);
+  const double y = std::max(std::fabs(dy) - half_size, 0.0);
+  const double z = std::max(std::fabs(dz) - half_size, 0.0);
+  return std::sqrt(x * x + y * y + z * z);
 }
 
 double uncertaintyThreshold(std::vector<float> values, double drop_percent) {

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -20,69 +21,182 @@ double msSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
-// Points and evidence that take part in the semantic pass.
+// Points that may give semantic evidence: inside the map and within max_range.
+struct RawPoints {
+  std::vector<octomap::point3d> positions;
+  std::vector<const float*> evidence;  // C values each, into the caller's array
+};
+
+// Points and evidence that take part in the kernel pass.
 struct SemanticPoints {
   std::vector<octomap::point3d> positions;
   std::vector<float> evidence;  // M x C
 };
 
-// Averages positions and evidence per cell of a grid of size `cell` (<= 0: no down-sampling).
-SemanticPoints downsample(const std::vector<octomap::point3d>& points,
-                          const std::vector<const float*>& evidence, int num_classes,
-                          double cell) {
-  SemanticPoints out;
-  if (!(cell > 0.0)) {
-    out.positions = points;
-    out.evidence.reserve(points.size() * num_classes);
-    for (const float* e : evidence) out.evidence.insert(out.evidence.end(), e, e + num_classes);
-    return out;
+double uncertaintyOf(const float* evidence, int num_classes) {
+  double strength = num_classes;
+  for (int c = 0; c < num_classes; ++c) strength += evidence[c];
+  return num_classes / strength;
+}
+
+// Cell index of a point on a grid of size `cell`, packed into 63 bits (21 per axis).
+int64_t cellKey(const octomap::point3d& p, double cell) {
+  const int64_t ix = static_cast<int64_t>(std::floor(p.x() / cell)) & 0x1FFFFF;
+  const int64_t iy = static_cast<int64_t>(std::floor(p.y() / cell)) & 0x1FFFFF;
+  const int64_t iz = static_cast<int64_t>(std::floor(p.z() / cell)) & 0x1FFFFF;
+  return (ix << 42) | (iy << 21) | iz;
+}
+
+// Drops the points above the per-scan percentile U_thr of their uncertainty (the paper's
+// indicator 1[u_i <= U_thr], over the scan's points before any down-sampling, as the authors do).
+RawPoints applyThreshold(RawPoints points, int num_classes, bool enabled, double drop_percent,
+                         InsertStats* stats) {
+  stats->uncertainty_threshold = std::numeric_limits<double>::infinity();
+  if (!enabled) return points;
+  std::vector<float> u(points.positions.size());
+  for (size_t i = 0; i < u.size(); ++i) {
+    u[i] = static_cast<float>(uncertaintyOf(points.evidence[i], num_classes));
   }
-  std::unordered_map<int64_t, uint32_t> cell_index;
-  cell_index.reserve(points.size());
-  std::vector<double> sums;  // x, y, z, count per cell
-  for (size_t i = 0; i < points.size(); ++i) {
-    const auto& p = points[i];
-    const int64_t ix = static_cast<int64_t>(std::floor(p.x() / cell)) & 0x1FFFFF;
-    const int64_t iy = static_cast<int64_t>(std::floor(p.y() / cell)) & 0x1FFFFF;
-    const int64_t iz = static_cast<int64_t>(std::floor(p.z() / cell)) & 0x1FFFFF;
-    const auto [it, inserted] =
-        cell_index.emplace((ix << 42) | (iy << 21) | iz, static_cast<uint32_t>(sums.size() / 4));
-    if (inserted) {
-      sums.insert(sums.end(), {0.0, 0.0, 0.0, 0.0});
-      out.evidence.insert(out.evidence.end(), num_classes, 0.0f);
+  const double threshold = uncertaintyThreshold(u, drop_percent);
+  stats->uncertainty_threshold = threshold;
+  RawPoints kept;
+  for (size_t i = 0; i < u.size(); ++i) {
+    if (u[i] > threshold) {  // the same float values the threshold came from
+      ++stats->points_dropped_uncertain;
+      continue;
     }
-    double* s = &sums[size_t(it->second) * 4];
+    kept.positions.push_back(points.positions[i]);
+    kept.evidence.push_back(points.evidence[i]);
+  }
+  return kept;
+}
+
+SemanticPoints copyAll(const RawPoints& points, int num_classes) {
+  SemanticPoints out;
+  out.positions = points.positions;
+  out.evidence.reserve(points.positions.size() * num_classes);
+  for (const float* e : points.evidence)
+    out.evidence.insert(out.evidence.end(), e, e + num_classes);
+  return out;
+}
+
+// Averages positions and evidence per cell of size `cell`. Sums are kept in double, so the
+// mean of finite float evidence is finite and representable (two values near FLT_MAX would
+// overflow a float sum and poison the voxel with NaN).
+SemanticPoints averagePerCell(const RawPoints& points, int num_classes, double cell) {
+  std::unordered_map<int64_t, uint32_t> cell_index;
+  cell_index.reserve(points.positions.size());
+  std::vector<double> sums;  // per cell: x, y, z, count, then C evidence sums
+  const size_t stride = 4 + size_t(num_classes);
+  for (size_t i = 0; i < points.positions.size(); ++i) {
+    const octomap::point3d& p = points.positions[i];
+    const auto [it, inserted] =
+        cell_index.emplace(cellKey(p, cell), static_cast<uint32_t>(sums.size() / stride));
+    if (inserted) sums.resize(sums.size() + stride, 0.0);
+    double* s = &sums[size_t(it->second) * stride];
     s[0] += p.x();
     s[1] += p.y();
     s[2] += p.z();
     s[3] += 1.0;
-    float* e = &out.evidence[size_t(it->second) * num_classes];
-    for (int c = 0; c < num_classes; ++c) e[c] += evidence[i][c];
+    for (int c = 0; c < num_classes; ++c) s[4 + c] += points.evidence[i][c];
   }
-  const size_t cells = sums.size() / 4;
+  const size_t cells = sums.size() / stride;
+  SemanticPoints out;
   out.positions.resize(cells);
+  out.evidence.resize(cells * num_classes);
   for (size_t j = 0; j < cells; ++j) {
-    const double* s = &sums[j * 4];
+    const double* s = &sums[j * stride];
     out.positions[j] = octomap::point3d(float(s[0] / s[3]), float(s[1] / s[3]), float(s[2] / s[3]));
-    float* e = &out.evidence[j * num_classes];
-    for (int c = 0; c < num_classes; ++c) e[c] = static_cast<float>(e[c] / s[3]);
+    for (int c = 0; c < num_classes; ++c)
+      out.evidence[j * num_classes + c] = float(s[4 + c] / s[3]);
   }
   return out;
 }
 
-// Key offsets of every voxel whose centre can lie within `radius_cells` of a point in the
-// centre voxel, i.e. |offset| <= radius_cells + sqrt(3)/2.
-std::vector<octomap::OcTreeKey> sphereOffsets(double radius_cells) {
-  const double reach = radius_cells + std::sqrt(3.0) / 2.0;
+// The authors' count cap: keeps the first `cap` points of every cell of size `cell`.
+SemanticPoints capPerCell(const RawPoints& points, int num_classes, double cell, int cap) {
+  std::unordered_map<int64_t, int> counts;
+  counts.reserve(points.positions.size() / 2 + 1);
+  RawPoints kept;
+  for (size_t i = 0; i < points.positions.size(); ++i) {
+    int& count = counts[cellKey(points.positions[i], cell)];
+    if (count >= cap) continue;
+    ++count;
+    kept.positions.push_back(points.positions[i]);
+    kept.evidence.push_back(points.evidence[i]);
+  }
+  return copyAll(kept, num_classes);
+}
+
+SemanticPoints downsample(const RawPoints& points, int num_classes, const SemanticConfig& config,
+                          double resolution) {
+  if (!(config.ds_multiplier > 0.0)) return copyAll(points, num_classes);
+  if (config.effectiveDownsampling() == "count_cap") {
+    const int cap = static_cast<int>(std::floor(config.ds_multiplier)) + 1;
+    return capPerCell(points, num_classes, 2.0 * resolution, cap);
+  }
+  return averagePerCell(points, num_classes, resolution / config.ds_multiplier);
+}
+
+// Key offsets of every voxel that can lie within `radius_cells` of a point in the centre voxel:
+// measured to voxel centres, |offset| <= radius + sqrt(3)/2; to voxel cubes, radius + sqrt(3).
+std::vector<octomap::OcTreeKey> sphereOffsets(double radius_cells, bool to_cube) {
+  const double reach = radius_cells + (to_cube ? 2.0 : 1.0) * std::sqrt(3.0) / 2.0;
   const int n = static_cast<int>(std::ceil(reach));
   std::vector<octomap::OcTreeKey> offsets;
   for (int dx = -n; dx <= n; ++dx)
     for (int dy = -n; dy <= n; ++dy)
       for (int dz = -n; dz <= n; ++dz)
         if (dx * dx + dy * dy + dz * dz <= reach * reach)
-          offsets.emplace_back(static_cast<octomap::key_type>(dx), static_cast<octomap::key_type>(dy),
+          offsets.emplace_back(static_cast<octomap::key_type>(dx),
+                               static_cast<octomap::key_type>(dy),
                                static_cast<octomap::key_type>(dz));
   return offsets;
+}
+
+// Opinions, support lengths and key-offset spheres of the semantic points.
+struct KernelInputs {
+  std::vector<PointOpinion> opinions;
+  std::vector<float> lengths;
+  std::vector<int> radius_ids;  // quantised support radius, key of `offsets`
+  std::unordered_map<int, std::vector<octomap::OcTreeKey>> offsets;
+};
+
+KernelInputs prepareKernel(const SemanticPoints& points, int num_classes,
+                           const SemanticConfig& config, bool uncertainty_kernel,
+                           double resolution) {
+  constexpr double kRadiusSteps = 4.0;  // radii quantised to quarter cells
+  const size_t m = points.positions.size();
+  KernelInputs in;
+  in.opinions.resize(m);
+  in.lengths.resize(m);
+  in.radius_ids.resize(m);
+  for (size_t j = 0; j < m; ++j) {
+    PointOpinion& o = in.opinions[j];
+    o.evidence = &points.evidence[j * num_classes];
+    o.strength = num_classes;
+    float best = 0.0f;
+    for (int c = 0; c < num_classes; ++c) {
+      o.strength += o.evidence[c];
+      if (o.evidence[c] > best) {
+        best = o.evidence[c];
+        o.argmax = c;
+      }
+    }
+    o.uncertainty = num_classes / o.strength;
+    // S-BKI uses the plain length l; the uncertainty kernels l beta e^{1 - gamma u}.
+    const double length = uncertainty_kernel
+                              ? adaptiveLength(config.length_scale, config.beta,
+                                               config.effectiveGamma(), o.uncertainty)
+                              : config.length_scale;
+    in.lengths[j] = static_cast<float>(length);
+    in.radius_ids[j] = static_cast<int>(std::ceil(length / resolution * kRadiusSteps));
+    if (!in.offsets.count(in.radius_ids[j])) {
+      in.offsets.emplace(in.radius_ids[j], sphereOffsets(in.radius_ids[j] / kRadiusSteps,
+                                                         config.kernel_distance == "voxel"));
+    }
+  }
+  return in;
 }
 
 // Per-thread aggregation: voxel key -> row of C summed increments.
@@ -97,6 +211,64 @@ struct Aggregate {
   }
 };
 
+// One kernel loop: every point adds k-weighted increments to each voxel within its support;
+// per-thread maps, merged into the first.
+Aggregate kernelPass(const SemanticPoints& points, const KernelInputs& in,
+                     const SemanticConfig& config, const EvidentialOcTree& tree, int threads) {
+  const int num_classes = tree.numClasses();
+  const FusionRule& rule = tree.rule();
+  const double half_voxel = tree.getResolution() / 2.0;
+  const bool to_cube = config.kernel_distance == "voxel";
+  const size_t m = points.positions.size();
+  std::vector<Aggregate> aggregates(threads);
+#pragma omp parallel num_threads(threads)
+  {
+    Aggregate& local = aggregates[omp_get_thread_num()];
+    local.rows.reserve(4 * m / threads + 16);
+#pragma omp for schedule(dynamic, 256)
+    for (size_t j = 0; j < m; ++j) {
+      const octomap::point3d& p = points.positions[j];
+      const octomap::OcTreeKey centre = tree.coordToKey(p);
+      for (const octomap::OcTreeKey& offset : in.offsets.at(in.radius_ids[j])) {
+        const octomap::OcTreeKey voxel(static_cast<octomap::key_type>(centre[0] + offset[0]),
+                                       static_cast<octomap::key_type>(centre[1] + offset[1]),
+                                       static_cast<octomap::key_type>(centre[2] + offset[2]));
+        const octomap::point3d d = p - tree.keyToCoord(voxel);
+        const double distance =
+            to_cube ? distanceToCube(d.x(), d.y(), d.z(), half_voxel) : d.norm();
+        const double k = sparseKernel(distance, in.lengths[j], config.sigma0);
+        if (k <= 0.0) continue;
+        rule.contribute(in.opinions[j], k, num_classes, local.row(voxel, num_classes));
+      }
+    }
+  }
+  Aggregate& total = aggregates[0];
+  for (int t = 1; t < threads; ++t) {
+    for (const auto& [voxel, index] : aggregates[t].rows) {
+      double* into = total.row(voxel, num_classes);
+      const double* from = &aggregates[t].increments[size_t(index) * num_classes];
+      for (int c = 0; c < num_classes; ++c) into[c] += from[c];
+    }
+  }
+  return std::move(total);
+}
+
+// Validates everything before the map is touched: a bad message changes nothing.
+void validateInput(const octomap::Pointcloud& points_W, const std::vector<float>& evidence,
+                   int num_classes) {
+  const size_t n = points_W.size();
+  if (evidence.size() != n * size_t(num_classes)) {
+    throw std::invalid_argument("evidence has " + std::to_string(evidence.size()) +
+                                " values, expected points x classes = " + std::to_string(n) +
+                                " x " + std::to_string(num_classes));
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const std::string problem = checkEvidence(&evidence[i * num_classes], num_classes);
+    if (!problem.empty())
+      throw std::invalid_argument("point " + std::to_string(i) + ": " + problem);
+  }
+}
+
 }  // namespace
 
 InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
@@ -107,17 +279,7 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   const size_t n = points_W.size();
   InsertStats stats;
   stats.points_in = n;
-
-  // Validate everything before the map is touched: a bad message changes nothing.
-  if (evidence.size() != n * size_t(num_classes)) {
-    throw std::invalid_argument("evidence has " + std::to_string(evidence.size()) +
-                                " values, expected points x classes = " + std::to_string(n) +
-                                " x " + std::to_string(num_classes));
-  }
-  for (size_t i = 0; i < n; ++i) {
-    const std::string problem = checkEvidence(&evidence[i * num_classes], num_classes);
-    if (!problem.empty()) throw std::invalid_argument("point " + std::to_string(i) + ": " + problem);
-  }
+  validateInput(points_W, evidence, num_classes);
   // OctoMap's coordToKeyChecked casts coordinate / resolution to int, which is undefined for
   // NaN, inf and anything beyond the map (points at 1e30): test the extent first.
   const double extent = tree->getResolution() * 32768.0;  // 16-bit keys, tree_max_val
@@ -133,10 +295,9 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   auto start = Clock::now();
   octomap::Pointcloud cloud;
   cloud.reserve(n);
-  std::vector<octomap::point3d> semantic_positions;
-  std::vector<const float*> semantic_evidence;
-  semantic_positions.reserve(n);
-  semantic_evidence.reserve(n);
+  RawPoints raw;
+  raw.positions.reserve(n);
+  raw.evidence.reserve(n);
   octomap::OcTreeKey key;
   for (size_t i = 0; i < n; ++i) {
     const octomap::point3d& p = points_W.getPoint(i);
@@ -149,8 +310,8 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
       ++stats.points_beyond_range;
       continue;
     }
-    semantic_positions.push_back(p);
-    semantic_evidence.push_back(&evidence[i * num_classes]);
+    raw.positions.push_back(p);
+    raw.evidence.push_back(&evidence[i * num_classes]);
   }
   if (cloud.size() == 0) return stats;
   const int threads = config_.threads > 0 ? config_.threads : omp_get_max_threads();
@@ -158,93 +319,20 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
       castRays(*tree, cloud, origin_W, config_.max_range, config_.discretize, threads);
   stats.ms_occupancy = msSince(start);
 
-  // 2. Opinions of the (down-sampled) points, percentile threshold and support lengths.
+  // 2. Percentile threshold, down-sampling, opinions and support lengths.
   start = Clock::now();
   const double resolution = tree->getResolution();
-  const SemanticPoints points = downsample(
-      semantic_positions, semantic_evidence, num_classes,
-      config_.ds_multiplier > 0.0 ? resolution / config_.ds_multiplier : 0.0);
-  const size_t m = points.positions.size();
-  stats.semantic_points = m;
+  const bool uncertainty_kernel = tree->rule().usesUncertaintyKernel();
+  raw = applyThreshold(std::move(raw), num_classes,
+                       uncertainty_kernel && config_.uncertainty_threshold, config_.drop_percent,
+                       &stats);
+  const SemanticPoints points = downsample(raw, num_classes, config_, resolution);
+  stats.semantic_points = points.positions.size();
+  const KernelInputs kernel =
+      prepareKernel(points, num_classes, config_, uncertainty_kernel, resolution);
 
-  const FusionRule& rule = tree->rule();
-  const bool uncertainty_kernel = rule.usesUncertaintyKernel();
-  std::vector<PointOpinion> opinions(m);
-  std::vector<float> uncertainties(m);
-  for (size_t j = 0; j < m; ++j) {
-    PointOpinion& o = opinions[j];
-    o.evidence = &points.evidence[j * num_classes];
-    o.strength = num_classes;
-    float best = 0.0f;
-    for (int c = 0; c < num_classes; ++c) {
-      o.strength += o.evidence[c];
-      if (o.evidence[c] > best) {
-        best = o.evidence[c];
-        o.argmax = c;
-      }
-    }
-    o.uncertainty = num_classes / o.strength;
-    uncertainties[j] = static_cast<float>(o.uncertainty);
-  }
-  const bool use_threshold = uncertainty_kernel && config_.uncertainty_threshold;
-  const double threshold = use_threshold
-                               ? uncertaintyThreshold(uncertainties, config_.drop_percent)
-                               : std::numeric_limits<double>::infinity();
-  stats.uncertainty_threshold = threshold;
-
-  // Support length per point, and the key-offset sphere for its quantised radius.
-  constexpr double kRadiusSteps = 4.0;  // radii quantised to quarter cells
-  const bool adaptive = uncertainty_kernel && config_.adaptive_length;
-  std::vector<float> lengths(m, 0.0f);
-  std::vector<int> radius_ids(m, -1);
-  std::unordered_map<int, std::vector<octomap::OcTreeKey>> offsets_by_radius;
-  for (size_t j = 0; j < m; ++j) {
-    if (uncertainties[j] > threshold) {  // the same float values the threshold came from
-      ++stats.points_dropped_uncertain;
-      continue;
-    }
-    const double length = adaptive ? adaptiveLength(config_.length_scale, config_.beta,
-                                                    config_.effectiveGamma(), opinions[j].uncertainty)
-                                   : config_.length_scale;
-    lengths[j] = static_cast<float>(length);
-    radius_ids[j] = static_cast<int>(std::ceil(length / resolution * kRadiusSteps));
-    if (!offsets_by_radius.count(radius_ids[j])) {
-      offsets_by_radius.emplace(radius_ids[j], sphereOffsets(radius_ids[j] / kRadiusSteps));
-    }
-  }
-
-  // 3. One kernel loop: every kept point adds k-weighted increments to each voxel whose centre
-  //    lies within its support; per-thread maps, merged afterwards.
-  std::vector<Aggregate> aggregates(threads);
-#pragma omp parallel num_threads(threads)
-  {
-    Aggregate& local = aggregates[omp_get_thread_num()];
-    local.rows.reserve(4 * m / threads + 16);
-#pragma omp for schedule(dynamic, 256)
-    for (size_t j = 0; j < m; ++j) {
-      if (radius_ids[j] < 0) continue;
-      const octomap::point3d& p = points.positions[j];
-      const octomap::OcTreeKey centre = tree->coordToKey(p);
-      const double length = lengths[j];
-      for (const octomap::OcTreeKey& offset : offsets_by_radius.at(radius_ids[j])) {
-        const octomap::OcTreeKey voxel(static_cast<octomap::key_type>(centre[0] + offset[0]),
-                                       static_cast<octomap::key_type>(centre[1] + offset[1]),
-                                       static_cast<octomap::key_type>(centre[2] + offset[2]));
-        const double distance = (tree->keyToCoord(voxel) - p).norm();
-        const double k = sparseKernel(distance, length, config_.sigma0);
-        if (k <= 0.0) continue;
-        rule.contribute(opinions[j], k, num_classes, local.row(voxel, num_classes));
-      }
-    }
-  }
-  Aggregate& total = aggregates[0];
-  for (int t = 1; t < threads; ++t) {
-    for (const auto& [voxel, index] : aggregates[t].rows) {
-      double* into = total.row(voxel, num_classes);
-      const double* from = &aggregates[t].increments[size_t(index) * num_classes];
-      for (int c = 0; c < num_classes; ++c) into[c] += from[c];
-    }
-  }
+  // 3. One kernel loop, aggregated per voxel key for the whole scan.
+  Aggregate total = kernelPass(points, kernel, config_, *tree, threads);
   stats.ms_kernel = msSince(start);
 
   // 4. One pass over the tree: occupancy and semantic updates, each touched leaf once, then the

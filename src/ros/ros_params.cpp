@@ -50,7 +50,9 @@ void readSemanticConfig(const ros::NodeHandle& nh, SemanticConfig* config) {
   nh.param("uncertainty_threshold", c.uncertainty_threshold, c.uncertainty_threshold);
   nh.param("reference_compat", c.reference_compat, c.reference_compat);
   nh.param("sbki_prior", c.sbki_prior, c.sbki_prior);
+  nh.param("downsampling", c.downsampling, c.downsampling);
   nh.param("ds_multiplier", c.ds_multiplier, c.ds_multiplier);
+  nh.param("kernel_distance", c.kernel_distance, c.kernel_distance);
   nh.param("sensor_model/max_range", c.max_range, c.max_range);
   nh.param("kernel_creates_leaves", c.kernel_creates_leaves, c.kernel_creates_leaves);
   nh.param("discretize", c.discretize, c.discretize);

@@ -19,14 +19,25 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
                   "Percentage psi of the most uncertain points dropped per scan")
       ->capture_default_str();
   cmd->add_flag("!--no-adaptive-length", c->adaptive_length,
-                "Fixed kernel length l (Table II ablation)");
+                "No adaptive length: gamma = 0, support l*beta*e (Table II ablation)");
   cmd->add_flag("!--no-threshold", c->uncertainty_threshold,
                 "Keep the most uncertain points too (Table II ablation)");
   cmd->add_flag("--reference-compat", c->reference_compat,
-                "gamma = 0, support l*beta*e, as the authors' released code");
+                "The authors' released configuration: gamma = 0 (support l*beta*e) and "
+                "count-cap down-sampling");
   cmd->add_option("--sbki-prior", c->sbki_prior, "S-BKI prior alpha0")->capture_default_str();
+  cmd->add_option("--downsampling", c->downsampling,
+                  "Semantic input down-sampling: average (grid of resolution/ds_multiplier) or "
+                  "count_cap (the authors': at most ds_multiplier+1 points per 2x2x2-voxel block)")
+      ->check(CLI::IsMember({"average", "count_cap"}))
+      ->capture_default_str();
   cmd->add_option("--ds-multiplier", c->ds_multiplier,
-                  "Semantic input down-sampling at resolution/ds (<= 0: off)")
+                  "Down-sampling parameter (see --downsampling; <= 0: off)")
+      ->capture_default_str();
+  cmd->add_option("--kernel-distance", c->kernel_distance,
+                  "Point-to-voxel distance of the kernel: voxel (to the voxel's cube, so a point "
+                  "always reaches its own voxel) or centre")
+      ->check(CLI::IsMember({"voxel", "centre"}))
       ->capture_default_str();
   cmd->add_option("--max-range", c->max_range, "Max sensor range [m] (< 0: unlimited)")
       ->capture_default_str();
@@ -70,7 +81,7 @@ std::vector<std::string> captionLines(const std::string& what, const std::string
 std::string variantName(const SemanticConfig& c) {
   std::string v = c.rule;
   if (c.rule == "dempster") {
-    if (c.reference_compat) v += " reference_compat (gamma=0)";
+    if (c.reference_compat) v += " reference_compat (gamma=0, count cap)";
     if (!c.adaptive_length) v += " w/o adaptive length";
     if (!c.uncertainty_threshold) v += " w/o threshold";
   }

@@ -49,12 +49,13 @@ nlohmann::json configJson(const SemanticConfig& config) {
     if (colon == std::string::npos) continue;
     std::string key = line.substr(0, colon), value = line.substr(colon + 1);
     value.erase(0, value.find_first_not_of(' '));
-    // "3 (reference_compat: 0 used)" -> keep the number, the flag is its own entry.
+    // "3 (0 used)" -> keep the value; what is used is its own entry (effective_*).
     const size_t paren = value.find(" (");
     if (paren != std::string::npos) value = value.substr(0, paren);
     j[key] = scalarFromText(value);
   }
   j["effective_gamma"] = config.effectiveGamma();
+  j["effective_downsampling"] = config.effectiveDownsampling();
   return j;
 }
 
