@@ -3,13 +3,14 @@
 # Stage 2 (node, tests, install rules) is src/ros/CMakeLists.txt, added after the core library.
 
 set(EVIDENTIAL_OCTOMAP_CATKIN_COMPONENTS
-  roscpp roslib std_msgs std_srvs sensor_msgs geometry_msgs visualization_msgs
+  roscpp roslib std_msgs std_srvs sensor_msgs geometry_msgs visualization_msgs diagnostic_msgs
   tf2 tf2_ros message_filters cv_bridge dynamic_reconfigure nodelet pluginlib)
 
 find_package(catkin REQUIRED COMPONENTS message_generation ${EVIDENTIAL_OCTOMAP_CATKIN_COMPONENTS})
 
 add_message_files(DIRECTORY msg FILES
   EvidentialMap.msg
+  MappingStatus.msg
   OccupancyMap.msg)
 add_service_files(DIRECTORY srv FILES
   ClearBbx.srv

@@ -2,17 +2,19 @@
 
 #include <cctype>
 #include <chrono>
+#include <cstdio>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include <cv_bridge/cv_bridge.h>
-#include <geometry_msgs/TransformStamped.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
 
 #include "camera_projection.h"
-#include "map_editing.h"
 #include "conversions.h"
 #include "evidential_octomap/io.h"
-#include "visualization.h"
+#include "map_editing.h"
+#include "node_status.h"
 
 namespace evidential_octomap {
 namespace {
@@ -70,17 +72,14 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
     ROS_INFO_STREAM("evidential_mapping_node: frame " << config_.frame_id << ", resolution "
                     << config_.resolution << " m, C = " << config_.num_classes << " ("
                     << classes_.dataset << ", " << config_.classes << "), input "
-                    << config_.input_type << "\n" << s.str());
+                    << config_.input_type << ", insertion queue " << config_.insert_queue_size
+                    << "\n" << s.str());
   }
 
-  // Outputs, latched as octomap_server latches its maps.
-  semantic_markers_pub_ =
-      nh_.advertise<visualization_msgs::MarkerArray>("occupied_cells_vis_array", 1, true);
-  uncertainty_markers_pub_ =
-      nh_.advertise<visualization_msgs::MarkerArray>("uncertainty_cells_vis_array", 1, true);
-  cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("semantic_cloud", 1, true);
-  map_pub_ = nh_.advertise<EvidentialMap>("evidential_map", 1, true);
-  occupancy_pub_ = nh_.advertise<OccupancyMap>("occupancy_map", 1, true);
+  outputs_ = std::make_unique<MapOutputs>(nh_, config_);
+  status_pub_ = pnh_.advertise<MappingStatus>("status", 1, true);
+  diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 1);
+  status_.queue_capacity = static_cast<uint32_t>(config_.insert_queue_size);
 
   save_srv_ = pnh_.advertiseService("save_map", &MappingServer::saveMap, this);
   load_srv_ = pnh_.advertiseService("load_map", &MappingServer::loadMap, this);
@@ -94,20 +93,38 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   MappingConfig rc;
   toReconfigure(semantic_config_, *tree_, config_, &rc);
   reconfigure_server_->updateConfig(rc);
-  reconfigure_server_->setCallback(
-      boost::bind(&MappingServer::reconfigure, this, boost::placeholders::_1, boost::placeholders::_2));
+  reconfigure_server_->setCallback(boost::bind(&MappingServer::reconfigure, this,
+                                               boost::placeholders::_1, boost::placeholders::_2));
 
-  // Input: cloud_in through a tf2 MessageFilter into frame_id.
-  cloud_sub_.subscribe(nh_, "cloud_in", config_.queue_size);
+  clouds_ = std::make_unique<LatestQueue<PendingCloud>>(size_t(config_.insert_queue_size));
+  insertion_thread_ = std::thread(&MappingServer::insertionLoop, this);
+  subscribeInputs();
+  restartPublishTimer();
+  status_timer_ = nh_.createTimer(ros::Duration(1.0), &MappingServer::statusTimer, this);
+  publishStatus();
+}
+
+MappingServer::~MappingServer() {
+  if (intake_spinner_) intake_spinner_->stop();
+  clouds_->close();
+  if (insertion_thread_.joinable()) insertion_thread_.join();
+}
+
+void MappingServer::subscribeInputs() {
+  ros::NodeHandle intake_nh(nh_);
+  intake_nh.setCallbackQueue(&intake_queue_);
+  // The subscriber's own queue only has to bridge the moments the reception thread is busy with
+  // a transform lookup; clouds that wait for TF sit in the MessageFilter (queue_size).
+  cloud_sub_.subscribe(intake_nh, "cloud_in", 20);
   tf_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
-      cloud_sub_, tf_buffer_, config_.frame_id, config_.queue_size, nh_);
-  tf_filter_->registerCallback(boost::bind(&MappingServer::cloudCallback, this, boost::placeholders::_1));
+      cloud_sub_, tf_buffer_, config_.frame_id, config_.queue_size, intake_nh);
+  tf_filter_->registerCallback(
+      boost::bind(&MappingServer::cloudCallback, this, boost::placeholders::_1));
   tf_filter_->registerFailureCallback(boost::bind(&MappingServer::tfFailure, this,
                                                   boost::placeholders::_1, boost::placeholders::_2));
-
   if (config_.use_camera) {
-    image_sub_.subscribe(nh_, "image_in", 2);
-    info_sub_.subscribe(nh_, "camera_info", 2);
+    image_sub_.subscribe(intake_nh, "image_in", 2);
+    info_sub_.subscribe(intake_nh, "camera_info", 2);
     image_sync_ = std::make_unique<
         message_filters::TimeSynchronizer<sensor_msgs::Image, sensor_msgs::CameraInfo>>(
         image_sub_, info_sub_, 5);
@@ -117,7 +134,8 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
              config_.camera_input.c_str(),
              config_.keep_outside_image ? "kept occupancy-only" : "dropped");
   }
-  restartPublishTimer();
+  intake_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &intake_queue_);
+  intake_spinner_->start();
 }
 
 std::unique_ptr<EvidentialOcTree> MappingServer::makeTree() {
@@ -135,80 +153,148 @@ std::unique_ptr<EvidentialOcTree> MappingServer::makeTree() {
   return tree;
 }
 
-// --- input ------------------------------------------------------------------------------
+// --- input (reception thread) -------------------------------------------------------------
 
 void MappingServer::tfFailure(const sensor_msgs::PointCloud2ConstPtr& cloud,
                               tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
+  {
+    std::lock_guard<std::mutex> lock(status_mutex_);
+    ++status_.clouds_dropped_tf;
+  }
   warnDropped("cloud dropped: no transform " + cloud->header.frame_id + " -> " +
               config_.frame_id + " (" + tfReason(reason) + "); map unchanged");
 }
 
 void MappingServer::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& cloud) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  geometry_msgs::TransformStamped T_W_S;
+  PendingCloud pending;
+  pending.cloud = cloud;
   try {
-    T_W_S = tf_buffer_.lookupTransform(config_.frame_id, cloud->header.frame_id,
-                                       cloud->header.stamp);
+    pending.T_W_S = tf_buffer_.lookupTransform(config_.frame_id, cloud->header.frame_id,
+                                               cloud->header.stamp);
   } catch (const tf2::TransformException& e) {
+    {
+      std::lock_guard<std::mutex> lock(status_mutex_);
+      ++status_.clouds_dropped_tf;
+    }
     warnDropped(std::string("cloud dropped: ") + e.what() + "; map unchanged");
     return;
   }
+  const std::optional<PendingCloud> dropped = clouds_->push(std::move(pending));
+  uint64_t dropped_total = 0;
+  double insert_ms = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(status_mutex_);
+    ++status_.clouds_received;
+    if (!dropped) return;
+    dropped_total = ++status_.clouds_dropped_queue;
+    insert_ms = status_.last_insert_ms;
+  }
+  char text[320];
+  std::snprintf(text, sizeof(text),
+                "cloud dropped (stamp %.3f): insertion is behind the input (an insert takes "
+                "%.0f ms, ~insert_queue_size is %zu); %llu dropped so far. Slow the input "
+                "(rosbag play -r), or raise ~insert_queue_size to absorb bursts",
+                dropped->cloud->header.stamp.toSec(), insert_ms, clouds_->capacity(),
+                static_cast<unsigned long long>(dropped_total));
+  warnDropped(text);
+}
+
+void MappingServer::imageCallback(const sensor_msgs::ImageConstPtr& image,
+                                  const sensor_msgs::CameraInfoConstPtr& info) {
+  std::lock_guard<std::mutex> lock(images_mutex_);
+  images_.emplace_back(image, info);
+  while (images_.size() > 10) images_.pop_front();
+}
+
+// --- insertion thread ---------------------------------------------------------------------
+
+void MappingServer::insertionLoop() {
+  while (std::optional<PendingCloud> pending = clouds_->pop()) {
+    try {
+      insertCloud(*pending);
+    } catch (const std::exception& e) {  // never let one cloud end the thread
+      {
+        std::lock_guard<std::mutex> lock(status_mutex_);
+        ++status_.clouds_dropped_invalid;
+      }
+      warnDropped(std::string("cloud dropped: ") + e.what() + "; map unchanged");
+    }
+    publishStatus();
+  }
+}
+
+void MappingServer::insertCloud(const PendingCloud& pending) {
+  const sensor_msgs::PointCloud2& cloud = *pending.cloud;
+  std::lock_guard<std::mutex> lock(mutex_);
   CloudReadOptions options;
   options.num_classes = tree_->numClasses();
-  options.input = config_.use_camera ? EvidenceInput::kNone : evidenceInputFromName(config_.input_type);
+  options.input =
+      config_.use_camera ? EvidenceInput::kNone : evidenceInputFromName(config_.input_type);
   options.label_magnitude = static_cast<float>(config_.label_evidence);
   options.raw_label_table = config_.label_is_raw ? &classes_ : nullptr;
   SemanticCloud scan;
-  std::string error = fromPointCloud2(*cloud, options, &scan);
-  if (error.empty() && config_.use_camera) error = paintFromCamera(*cloud, &scan);
+  std::string error = fromPointCloud2(cloud, options, &scan);
+  if (error.empty() && config_.use_camera) error = paintFromCamera(cloud, &scan);
   if (!error.empty()) {
-    warnDropped("cloud dropped (frame " + cloud->header.frame_id + "): " + error +
+    {
+      std::lock_guard<std::mutex> status_lock(status_mutex_);
+      ++status_.clouds_dropped_invalid;
+    }
+    warnDropped("cloud dropped (frame " + cloud.header.frame_id + "): " + error +
                 "; map unchanged");
     return;
   }
   const auto t0 = std::chrono::steady_clock::now();
   InsertStats stats;
   try {
-    stats = tree_->insertSemanticScan(scan.points_S, scan.evidence, toPose(T_W_S.transform));
+    stats = tree_->insertSemanticScan(scan.points_S, scan.evidence, toPose(pending.T_W_S.transform));
   } catch (const std::invalid_argument& e) {
+    {
+      std::lock_guard<std::mutex> status_lock(status_mutex_);
+      ++status_.clouds_dropped_invalid;
+    }
     warnDropped(std::string("cloud dropped: ") + e.what() + "; map unchanged");
     return;
   }
   const double ms = msSince(t0);
-  insert_ms_total_ += ms;
-  ++scans_;
-  last_origin_W_ = octomap::point3d(T_W_S.transform.translation.x, T_W_S.transform.translation.y,
-                                    T_W_S.transform.translation.z);
+  const auto& t = pending.T_W_S.transform.translation;
+  last_origin_W_ = octomap::point3d(t.x, t.y, t.z);
+  size_t scans = 0;
+  {
+    std::lock_guard<std::mutex> status_lock(status_mutex_);
+    scans = ++status_.clouds_inserted;
+    insert_ms_total_ += ms;
+    status_.last_insert_ms = ms;
+    status_.mean_insert_ms = insert_ms_total_ / double(scans);
+    status_.last_points = static_cast<uint32_t>(stats.points_in);
+  }
+  recordMapSize();
   ROS_INFO("scan %zu: %zu points (%s), %zu semantic, %zu voxels updated, insert %.0f ms "
-           "(occupancy %.0f, kernel %.0f, update %.0f); map %zu leaves, %zu semantic",
-           scans_, stats.points_in, scan.source.c_str(), stats.semantic_points,
+           "(occupancy %.0f, kernel %.0f, update %.0f); map %zu leaves, %zu semantic; %zu waiting",
+           scans, stats.points_in, scan.source.c_str(), stats.semantic_points,
            stats.voxels_updated, ms, stats.ms_occupancy, stats.ms_kernel, stats.ms_update,
-           tree_->getNumLeafNodes(), tree_->numSemanticNodes());
-  markChanged();
-  if (config_.publish_rate <= 0.0) publishViews(false);
-}
-
-void MappingServer::imageCallback(const sensor_msgs::ImageConstPtr& image,
-                                  const sensor_msgs::CameraInfoConstPtr& info) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  images_.emplace_back(image, info);
-  while (images_.size() > 10) images_.pop_front();
+           tree_->getNumLeafNodes(), tree_->numSemanticNodes(), clouds_->size());
+  outputs_->markStale();
+  if (config_.publish_rate <= 0.0) publishMap(false);
 }
 
 std::string MappingServer::paintFromCamera(const sensor_msgs::PointCloud2& cloud,
                                            SemanticCloud* scan) {
   // The image nearest in time to the cloud, within camera/max_age.
-  const std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::CameraInfoConstPtr>* best = nullptr;
-  double best_dt = config_.camera_max_age;
-  for (const auto& pair : images_) {
-    const double dt = std::abs((pair.first->header.stamp - cloud.header.stamp).toSec());
-    if (dt <= best_dt) {
-      best_dt = dt;
-      best = &pair;
+  std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::CameraInfoConstPtr> best;
+  {
+    std::lock_guard<std::mutex> lock(images_mutex_);
+    double best_dt = config_.camera_max_age;
+    for (const auto& pair : images_) {
+      const double dt = std::abs((pair.first->header.stamp - cloud.header.stamp).toSec());
+      if (dt <= best_dt) {
+        best_dt = dt;
+        best = pair;
+      }
     }
   }
-  if (!best) return "no evidence image within camera/max_age of the cloud";
-  const sensor_msgs::Image& image = *best->first;
+  if (!best.first) return "no evidence image within camera/max_age of the cloud";
+  const sensor_msgs::Image& image = *best.first;
   geometry_msgs::TransformStamped T_C_S;
   try {
     T_C_S = tf_buffer_.lookupTransform(image.header.frame_id, cloud.header.frame_id,
@@ -218,7 +304,7 @@ std::string MappingServer::paintFromCamera(const sensor_msgs::PointCloud2& cloud
   }
   cv_bridge::CvImageConstPtr cv_image;
   try {
-    cv_image = cv_bridge::toCvShare(best->first);
+    cv_image = cv_bridge::toCvShare(best.first);
   } catch (const cv_bridge::Exception& e) {
     return std::string("evidence image: ") + e.what();
   }
@@ -233,8 +319,9 @@ std::string MappingServer::paintFromCamera(const sensor_msgs::PointCloud2& cloud
     R(1, c) = col.y();
     R(2, c) = col.z();
   }
-  const PinholeCamera camera = cameraFromInfo(*best->second);
-  const std::vector<long> pixels = projectToPixels(scan->points_S, R, cv::Vec3d(t.x, t.y, t.z), camera);
+  const PinholeCamera camera = cameraFromInfo(*best.second);
+  const std::vector<long> pixels =
+      projectToPixels(scan->points_S, R, cv::Vec3d(t.x, t.y, t.z), camera);
   octomap::Pointcloud painted;
   std::vector<float> evidence;
   std::string error = evidenceFromImage(scan->points_S, pixels, cv_image->image,
@@ -248,9 +335,7 @@ std::string MappingServer::paintFromCamera(const sensor_msgs::PointCloud2& cloud
   return "";
 }
 
-// --- output -----------------------------------------------------------------------------
-
-void MappingServer::markChanged() { dirty_views_ = dirty_map_ = dirty_occupancy_ = true; }
+// --- output -------------------------------------------------------------------------------
 
 // At publish_rate; with publish_rate <= 0 (publish after every scan) a 1 Hz timer still serves
 // outputs that had no subscriber when their scan arrived.
@@ -262,73 +347,55 @@ void MappingServer::restartPublishTimer() {
 
 void MappingServer::publishTimer(const ros::TimerEvent&) {
   std::lock_guard<std::mutex> lock(mutex_);
-  publishViews(false);
+  publishMap(false);
 }
 
-// Publishes every output that is older than the map and has a subscriber (force: regardless
-// of subscribers, used after reset so latched views are emptied).
-void MappingServer::publishViews(bool force) {
-  const bool want_markers = semantic_markers_pub_.getNumSubscribers() > 0 ||
-                            uncertainty_markers_pub_.getNumSubscribers() > 0;
-  const bool want_cloud = cloud_pub_.getNumSubscribers() > 0;
-  const bool views = dirty_views_ && (force || want_markers || want_cloud);
-  const bool map = dirty_map_ && (force || map_pub_.getNumSubscribers() > 0);
-  const bool occupancy = dirty_occupancy_ && (force || occupancy_pub_.getNumSubscribers() > 0);
-  if (!views && !map && !occupancy) return;
-
+void MappingServer::publishMap(bool force) {
   const auto t0 = std::chrono::steady_clock::now();
-  const ros::Time stamp = ros::Time::now();
-  size_t n_voxels = 0;
-  double ms_views = 0.0, ms_map = 0.0;
-  if (views) {
-    Box box;
-    if (config_.publish_radius > 0.0) {
-      const octomap::point3d r(config_.publish_radius, config_.publish_radius, config_.publish_radius);
-      box.min = last_origin_W_ - r;
-      box.max = last_origin_W_ + r;
-    }
-    const std::vector<VoxelView> voxels = occupiedVoxels(*tree_, box);
-    n_voxels = voxels.size();
-    const unsigned depth = tree_->getTreeDepth();
-    if (force || semantic_markers_pub_.getNumSubscribers() > 0) {
-      auto markers = semanticMarkers(voxels, classes_, config_.frame_id, depth);
-      for (auto& m : markers.markers) m.header.stamp = stamp;
-      semantic_markers_pub_.publish(markers);
-    }
-    if (force || uncertainty_markers_pub_.getNumSubscribers() > 0) {
-      auto markers = uncertaintyMarkers(voxels, config_.uncertainty_range, config_.frame_id, depth);
-      for (auto& m : markers.markers) m.header.stamp = stamp;
-      uncertainty_markers_pub_.publish(markers);
-    }
-    if (force || want_cloud) {
-      sensor_msgs::PointCloud2 cloud = toPointCloud2(voxels, classes_, config_.frame_id);
-      cloud.header.stamp = stamp;
-      cloud_pub_.publish(cloud);
-    }
-    dirty_views_ = false;
-    ms_views = msSince(t0);
+  const std::string sent = outputs_->publish(*tree_, classes_, last_origin_W_, force);
+  if (sent.empty()) return;
+  uint64_t scans = 0;
+  double mean_ms = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(status_mutex_);
+    scans = status_.clouds_inserted;
+    mean_ms = status_.mean_insert_ms;
   }
-  if (map) {
-    EvidentialMap msg = toEvidentialMap(*tree_, config_.frame_id);
-    msg.header.stamp = stamp;
-    map_pub_.publish(msg);
-    dirty_map_ = false;
-    ms_map = msSince(t0) - ms_views;
+  ROS_INFO("published%s in %.0f ms (mean insert %.0f ms over %llu scans)", sent.c_str(),
+           msSince(t0), mean_ms, static_cast<unsigned long long>(scans));
+}
+
+void MappingServer::recordMapSize() {
+  std::lock_guard<std::mutex> lock(status_mutex_);
+  status_.map_leaves = tree_->getNumLeafNodes();
+  status_.map_semantic_leaves = tree_->numSemanticNodes();
+  status_.map_memory_bytes = tree_->memoryUsage();
+}
+
+void MappingServer::publishStatus() {
+  MappingStatus status;
+  {
+    std::lock_guard<std::mutex> lock(status_mutex_);
+    status_.queue_length = static_cast<uint32_t>(clouds_->size());
+    status_.header.stamp = ros::Time::now();
+    status = status_;
   }
-  if (occupancy) {
-    OccupancyMap msg = toOccupancyMap(*tree_, config_.frame_id);
-    msg.header.stamp = stamp;
-    occupancy_pub_.publish(msg);
-    dirty_occupancy_ = false;
+  status_pub_.publish(status);
+}
+
+void MappingServer::statusTimer(const ros::TimerEvent&) {
+  publishStatus();
+  MappingStatus now, before;
+  {
+    std::lock_guard<std::mutex> lock(status_mutex_);
+    now = status_;
+    before = last_diagnosed_;
+    last_diagnosed_ = status_;
   }
-  const double ms = msSince(t0);
-  publish_ms_total_ += ms;
-  ++publishes_;
-  ROS_INFO("published%s%s%s in %.1f ms (views of %zu voxels %.1f, evidential_map %.1f, "
-           "occupancy_map %.1f; mean insert %.0f ms over %zu scans)",
-           views ? " views" : "", map ? " map" : "", occupancy ? " occupancy" : "", ms, n_voxels,
-           ms_views, ms_map, ms - ms_views - ms_map, scans_ ? insert_ms_total_ / scans_ : 0.0,
-           scans_);
+  diagnostic_msgs::DiagnosticArray array;
+  array.header.stamp = now.header.stamp;
+  array.status.push_back(toDiagnosticStatus(now, before, ros::this_node::getName()));
+  diagnostics_pub_.publish(array);
 }
 
 // --- services ---------------------------------------------------------------------------
@@ -368,8 +435,9 @@ bool MappingServer::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
   res.success = true;
   res.message = "loaded " + std::to_string(tree_->getNumLeafNodes()) + " leaves from " + req.path;
   ROS_INFO("load_map: %s", res.message.c_str());
-  markChanged();
-  publishViews(true);
+  recordMapSize();
+  outputs_->markStale();
+  publishMap(false);
   return true;
 }
 
@@ -387,11 +455,10 @@ bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
     ROS_ERROR("reset: %s; keeping rule %s", e.what(), semantic_config_.rule.c_str());
   }
   tree_ = makeTree();
-  scans_ = 0;
-  insert_ms_total_ = 0.0;
   ROS_INFO("reset: map cleared (rule %s)", semantic_config_.rule.c_str());
-  markChanged();
-  publishViews(true);
+  recordMapSize();
+  outputs_->markStale();
+  publishMap(true);
   return true;
 }
 
@@ -401,8 +468,9 @@ bool MappingServer::clearBbx(ClearBbx::Request& req, ClearBbx::Response& res) {
   res.voxels_cleared = clearBox(tree_.get(), min, max);
   ROS_INFO("clear_bbx: %u leaves cleared in [%.2f %.2f %.2f] .. [%.2f %.2f %.2f]",
            res.voxels_cleared, min.x(), min.y(), min.z(), max.x(), max.y(), max.z());
-  markChanged();
-  publishViews(true);
+  recordMapSize();
+  outputs_->markStale();
+  publishMap(true);
   return true;
 }
 

@@ -1,17 +1,28 @@
 // The ROS 1 mapping server: subscribers, tf2, services, timers and publishers around one
-// EvidentialOcTree. Conversions, parameters and markers live in their own files; the maths
-// lives in the core library.
+// EvidentialOcTree. Conversions, parameters, outputs and markers live in their own files; the
+// maths lives in the core library.
+//
+// Threads: clouds (and camera images) are received on their own callback queue and spinner,
+// which only looks up the transform and puts the cloud in a bounded queue of the newest clouds;
+// one insertion thread takes clouds from that queue and fuses them into the map. A slow insert
+// therefore never blocks reception, and every cloud that cannot be mapped is counted, warned
+// (throttled) and reported on ~status and /diagnostics. Services and the publish timers run on
+// the node's own callback queue; the map mutex serialises them with the insertion thread.
 #pragma once
 
+#include <atomic>
 #include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include <boost/thread/recursive_mutex.hpp>
 #include <dynamic_reconfigure/server.h>
+#include <geometry_msgs/TransformStamped.h>
 #include <message_filters/subscriber.h>
 #include <message_filters/time_synchronizer.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/CameraInfo.h>
 #include <sensor_msgs/Image.h>
@@ -24,10 +35,13 @@
 #include "evidential_octomap/ClearBbx.h"
 #include "evidential_octomap/LoadMap.h"
 #include "evidential_octomap/MappingConfig.h"
+#include "evidential_octomap/MappingStatus.h"
 #include "evidential_octomap/QueryMap.h"
 #include "evidential_octomap/SaveMap.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "latest_queue.h"
+#include "map_outputs.h"
 #include "ros_params.h"
 
 namespace evidential_octomap {
@@ -37,23 +51,36 @@ class MappingServer {
   // Reads every parameter from nh_private; throws std::exception for unusable parameters
   // (unreadable class table, num_classes disagreeing with it, unknown rule).
   MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private);
-
-  const EvidentialOcTree& tree() const { return *tree_; }
+  // Stops reception, then the insertion thread (a cloud being inserted is finished first).
+  ~MappingServer();
 
  private:
-  // --- input ----------------------------------------------------------------------------
+  // A received cloud with its sensor pose, waiting for the insertion thread.
+  struct PendingCloud {
+    sensor_msgs::PointCloud2ConstPtr cloud;
+    geometry_msgs::TransformStamped T_W_S;
+  };
+
+  // --- input (reception thread) ---------------------------------------------------------
   void cloudCallback(const sensor_msgs::PointCloud2ConstPtr& cloud);
   void tfFailure(const sensor_msgs::PointCloud2ConstPtr& cloud,
                  tf2_ros::filter_failure_reasons::FilterFailureReason reason);
   void imageCallback(const sensor_msgs::ImageConstPtr& image,
                      const sensor_msgs::CameraInfoConstPtr& info);
+  void subscribeInputs();
+
+  // --- insertion thread -----------------------------------------------------------------
+  void insertionLoop();
+  void insertCloud(const PendingCloud& pending);
   // Replaces the cloud's evidence by the camera's; "" or why the scan cannot be painted.
   std::string paintFromCamera(const sensor_msgs::PointCloud2& cloud, SemanticCloud* scan);
 
   // --- output ---------------------------------------------------------------------------
   void publishTimer(const ros::TimerEvent&);
-  void publishViews(bool force);
-  void markChanged();
+  void statusTimer(const ros::TimerEvent&);
+  // Publishes the stale outputs that have subscribers (all with `force`); map mutex held.
+  void publishMap(bool force);
+  void publishStatus();
   void restartPublishTimer();
 
   // --- services -------------------------------------------------------------------------
@@ -66,39 +93,46 @@ class MappingServer {
 
   // A fresh, empty tree from the current parameters.
   std::unique_ptr<EvidentialOcTree> makeTree();
+  // Map size into status_ (map mutex held).
+  void recordMapSize();
 
   ros::NodeHandle nh_, pnh_;
   NodeConfig config_;
   SemanticConfig semantic_config_;
   ClassTable classes_;
   std::unique_ptr<EvidentialOcTree> tree_;
-  std::mutex mutex_;  // map + config, shared by callbacks and services
+  std::mutex mutex_;  // map, config and outputs: insertion thread, services, timers
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
+
+  // Reception: its own callback queue and thread, so a long insert or service never stalls it.
+  ros::CallbackQueue intake_queue_;
+  std::unique_ptr<ros::AsyncSpinner> intake_spinner_;
   message_filters::Subscriber<sensor_msgs::PointCloud2> cloud_sub_;
   std::unique_ptr<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>> tf_filter_;
-
-  // Camera path.
   message_filters::Subscriber<sensor_msgs::Image> image_sub_;
   message_filters::Subscriber<sensor_msgs::CameraInfo> info_sub_;
   std::unique_ptr<message_filters::TimeSynchronizer<sensor_msgs::Image, sensor_msgs::CameraInfo>>
       image_sync_;
+  std::mutex images_mutex_;
   std::deque<std::pair<sensor_msgs::ImageConstPtr, sensor_msgs::CameraInfoConstPtr>> images_;
 
-  ros::Publisher semantic_markers_pub_, uncertainty_markers_pub_, cloud_pub_, map_pub_,
-      occupancy_pub_;
+  // Insertion.
+  std::unique_ptr<LatestQueue<PendingCloud>> clouds_;
+  std::thread insertion_thread_;
+
+  std::unique_ptr<MapOutputs> outputs_;
+  ros::Publisher status_pub_, diagnostics_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_, clear_srv_, query_srv_;
-  ros::Timer publish_timer_;
+  ros::Timer publish_timer_, status_timer_;
   std::unique_ptr<dynamic_reconfigure::Server<MappingConfig>> reconfigure_server_;
   boost::recursive_mutex reconfigure_mutex_;
 
-  // Which outputs are older than the map; each is sent when it has a subscriber.
-  bool dirty_views_ = false, dirty_map_ = false, dirty_occupancy_ = false;
+  std::mutex status_mutex_;  // status_ and last_diagnosed_: every thread updates counters
+  MappingStatus status_, last_diagnosed_;
+  double insert_ms_total_ = 0.0;
   octomap::point3d last_origin_W_;
-  size_t scans_ = 0;
-  double insert_ms_total_ = 0.0, publish_ms_total_ = 0.0;
-  size_t publishes_ = 0;
 };
 
 }  // namespace evidential_octomap

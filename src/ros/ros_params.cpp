@@ -26,12 +26,16 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("uncertainty_range/min", c.uncertainty_range.min, c.uncertainty_range.min);
   nh.param("uncertainty_range/max", c.uncertainty_range.max, c.uncertainty_range.max);
   nh.param("queue_size", c.queue_size, c.queue_size);
+  nh.param("insert_queue_size", c.insert_queue_size, c.insert_queue_size);
+  nh.param("latch", c.latch, c.latch);
   nh.param("use_camera", c.use_camera, c.use_camera);
   nh.param("camera/input", c.camera_input, c.camera_input);
   nh.param("camera/keep_outside_image", c.keep_outside_image, c.keep_outside_image);
   nh.param("camera/max_age", c.camera_max_age, c.camera_max_age);
   if (!(c.resolution > 0.0)) throw std::invalid_argument("~resolution must be > 0");
   if (c.label_evidence < 0.0) throw std::invalid_argument("~label_evidence must be >= 0");
+  if (c.queue_size < 1) throw std::invalid_argument("~queue_size must be >= 1");
+  if (c.insert_queue_size < 1) throw std::invalid_argument("~insert_queue_size must be >= 1");
   if (c.camera_input != "evidence" && c.camera_input != "label")
     throw std::invalid_argument("~camera/input must be 'evidence' or 'label'");
   evidenceInputFromName(c.input_type);  // throws with the valid names

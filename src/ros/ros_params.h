@@ -28,7 +28,10 @@ struct NodeConfig {
   double publish_rate = 1.0;         // max map publishing rate [Hz]; <= 0: after every scan
   double publish_radius = -1.0;      // > 0: views only within this radius of the sensor [m]
   UncertaintyRange uncertainty_range;  // uncertainty colour range (fixed 0..1 or automatic)
-  int queue_size = 5;                // tf2 MessageFilter queue
+  int queue_size = 5;                // tf2 MessageFilter queue (clouds waiting for their TF)
+  int insert_queue_size = 1;         // clouds waiting for the insertion thread; when full, the
+                                     // oldest is dropped (counted, warned, on ~status)
+  bool latch = true;                 // latch the map topics (as octomap_server's `latch`)
   // Camera path (off unless use_camera): evidence image + CameraInfo paint the LiDAR cloud.
   bool use_camera = false;
   std::string camera_input = "evidence";  // evidence (32FC(C)) | label (mono8/mono16)

@@ -27,6 +27,7 @@
 #include "evidential_octomap/QueryMap.h"
 #include "evidential_octomap/SaveMap.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "node_test_utils.h"
 
 using sensor_msgs::PointField;
 namespace eo = evidential_octomap;
@@ -44,69 +45,23 @@ std::string kLogNode = kNode;
 // The sensor sits at (1, 0, 0) in map; its clouds are in frame "lidar".
 // Scene (sensor frame): a wall of class `wall_class` at x = 4 (map x = 5), y in [-2, 2],
 // z in [0, 1.5]; a road patch at z = -1.6 in front of it.
-struct Point {
-  float x, y, z;
-  int cls;
-};
+using node_test::Point;
+using node_test::gp;
 
 std::vector<Point> scene(float wall_x = 4.05f, int wall_class = kBuilding) {
-  std::vector<Point> pts;
-  for (float y = -2.f; y <= 2.f; y += 0.05f)
-    for (float z = 0.f; z <= 1.5f; z += 0.05f) pts.push_back({wall_x, y, z, wall_class});
+  std::vector<Point> pts = node_test::wall(wall_x, -2.f, 2.f, 0.f, 1.5f, 0.05f, wall_class);
   for (float x = 1.f; x <= 2.f; x += 0.05f)
     for (float y = -1.f; y <= 1.f; y += 0.05f) pts.push_back({x, y, -1.6f, kRoad});
   return pts;
 }
 
-// x, y, z, evidence[C]; one-hot evidence of 30 on each point's class.
-sensor_msgs::PointCloud2 cloudOf(const std::vector<Point>& pts, const std::string& frame = "lidar",
+sensor_msgs::PointCloud2 lidarCloud(const std::vector<Point>& pts, const std::string& frame = "lidar",
                                  int count = kC) {
-  sensor_msgs::PointCloud2 msg;
-  msg.header.frame_id = frame;
-  msg.header.stamp = ros::Time::now();
-  const char* axes[3] = {"x", "y", "z"};
-  for (int i = 0; i < 3; ++i) {
-    PointField f;
-    f.name = axes[i];
-    f.offset = 4 * i;
-    f.datatype = PointField::FLOAT32;
-    f.count = 1;
-    msg.fields.push_back(f);
-  }
-  PointField e;
-  e.name = "evidence";
-  e.offset = 12;
-  e.datatype = PointField::FLOAT32;
-  e.count = count;
-  msg.fields.push_back(e);
-  msg.point_step = 12 + 4 * count;
-  msg.height = 1;
-  msg.width = pts.size();
-  msg.row_step = msg.point_step * msg.width;
-  msg.is_dense = true;
-  msg.data.assign(msg.row_step, 0);
-  for (size_t i = 0; i < pts.size(); ++i) {
-    uint8_t* p = msg.data.data() + i * msg.point_step;
-    const float xyz[3] = {pts[i].x, pts[i].y, pts[i].z};
-    std::memcpy(p, xyz, 12);
-    if (pts[i].cls < count) {
-      const float ev = 30.f;
-      std::memcpy(p + 12 + 4 * pts[i].cls, &ev, 4);
-    }
-  }
-  return msg;
+  return node_test::cloudOf(pts, frame, count);
 }
 
 void setEvidence(sensor_msgs::PointCloud2* msg, size_t point, int cls, float value) {
   std::memcpy(msg->data.data() + point * msg->point_step + 12 + 4 * cls, &value, 4);
-}
-
-geometry_msgs::Point gp(double x, double y, double z) {
-  geometry_msgs::Point p;
-  p.x = x;
-  p.y = y;
-  p.z = z;
-  return p;
 }
 
 class MappingNodeTest : public ::testing::Test {
@@ -154,16 +109,7 @@ class MappingNodeTest : public ::testing::Test {
     if (m->name == kLogNode) logs_.push_back(m->msg);
   }
 
-  // Spins until `done` holds; false after 60 s (a hang guard, not a timing assertion).
-  bool waitFor(const std::function<bool()>& done) {
-    const ros::WallTime give_up = ros::WallTime::now() + ros::WallDuration(60.0);
-    while (ros::ok() && ros::WallTime::now() < give_up) {
-      ros::spinOnce();
-      if (done()) return true;
-      ros::WallDuration(0.02).sleep();
-    }
-    return false;
-  }
+  bool waitFor(const std::function<bool()>& done) { return node_test::waitFor(done); }
 
   bool logSays(const std::string& text) {
     for (const auto& line : logs_)
@@ -247,7 +193,7 @@ bool onWall(float x, float y, float z) {
 }  // namespace
 
 TEST_F(MappingNodeTest, SemanticMarkersShowTheWallInBuildingColour) {
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   size_t wall_cubes = 0, building_coloured = 0, total = 0;
   for (const auto& m : semantic_->markers) {
     EXPECT_EQ(m.header.frame_id, "map");
@@ -271,7 +217,7 @@ TEST_F(MappingNodeTest, SemanticMarkersShowTheWallInBuildingColour) {
 
 TEST_F(MappingNodeTest, SemanticCloudCarriesClassAndFusedUncertainty) {
   const std::vector<Point> pts = scene();
-  insert(cloudOf(pts));
+  insert(lidarCloud(pts));
   // The same scan through the core library directly, with the same (default) parameters.
   eo::EvidentialOcTree reference(0.2, kC);
   octomap::Pointcloud points_S;
@@ -307,7 +253,7 @@ TEST_F(MappingNodeTest, SemanticCloudCarriesClassAndFusedUncertainty) {
 }
 
 TEST_F(MappingNodeTest, QueryReturnsClassBeliefsAndUnknown) {
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   const auto r = query({gp(5.05, 0.0, 0.75), gp(50, 50, 50)});
   ASSERT_EQ(r.labels.size(), 2u);
   ASSERT_EQ(r.num_classes, kC);
@@ -326,7 +272,7 @@ TEST_F(MappingNodeTest, QueryReturnsClassBeliefsAndUnknown) {
 }
 
 TEST_F(MappingNodeTest, SaveMapWritesAnOtThatReadsBackAsEvidentialOcTree) {
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   const std::string path = "/tmp/evidential_octomap_rostest_" + std::to_string(getpid()) + ".ot";
   eo::SaveMap srv;
   srv.request.path = path;
@@ -351,7 +297,7 @@ TEST_F(MappingNodeTest, SaveMapWritesAnOtThatReadsBackAsEvidentialOcTree) {
 }
 
 TEST_F(MappingNodeTest, LoadMapRestoresASavedMapAndRefusesBadFiles) {
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   const std::string path = "/tmp/evidential_octomap_rostest_load_" + std::to_string(getpid()) + ".ot";
   eo::SaveMap save;
   save.request.path = path;
@@ -385,7 +331,7 @@ TEST_F(MappingNodeTest, EvidentialMapMessageHoldsTheSerialisedTree) {
       "evidential_map", 1, [&](const eo::EvidentialMapConstPtr& m) { map = m; });
   ASSERT_TRUE(waitFor([&] { return sub.getNumPublishers() > 0; }));
   const ros::Time sent = ros::Time::now();
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   // The latched map of the reset in SetUp may arrive first: wait for the one after the scan.
   ASSERT_TRUE(waitFor([&] { return map && map->header.stamp >= sent; }));
   EXPECT_EQ(map->num_classes, kC);
@@ -398,7 +344,7 @@ TEST_F(MappingNodeTest, EvidentialMapMessageHoldsTheSerialisedTree) {
 }
 
 TEST_F(MappingNodeTest, ResetEmptiesTheMap) {
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   ASSERT_EQ(query({gp(5.05, 0.0, 0.75)}).labels[0], kBuilding);
   semantic_.reset();
   callReset();
@@ -413,7 +359,7 @@ TEST_F(MappingNodeTest, ResetEmptiesTheMap) {
 }
 
 TEST_F(MappingNodeTest, ClearBbxClearsOnlyInside) {
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   eo::ClearBbx srv;
   srv.request.min = gp(4.0, 0.5, -0.5);
   srv.request.max = gp(6.0, 3.0, 2.0);
@@ -445,13 +391,13 @@ TEST_F(MappingNodeTest, MaxRangeChangesAtRunTimeAndSurvivesReset) {
   // The wall is 4 m from the sensor, the road patch 1.9-2.8 m: a 3 m range keeps only the road.
   ASSERT_TRUE(setDouble("sensor_model_max_range", 3.0));
   callReset();
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   auto r = query({gp(5.05, 0.0, 0.75), gp(2.5, 0.0, -1.5)});
   EXPECT_EQ(r.labels[0], -1);     // beyond range: no semantic evidence
   EXPECT_EQ(r.labels[1], kRoad);  // within range
   ASSERT_TRUE(setDouble("sensor_model_max_range", -1.0));
   callReset();
-  insert(cloudOf(scene()));
+  insert(lidarCloud(scene()));
   r = query({gp(5.05, 0.0, 0.75)});
   EXPECT_EQ(r.labels[0], kBuilding);
 }
@@ -464,7 +410,7 @@ class RobustnessTest : public MappingNodeTest {
   // unchanged, and the node's log names the problem.
   void expectRejected(const sensor_msgs::PointCloud2& bad, const std::string& log_text,
                       int repeats = 1) {
-    insert(cloudOf(scene()));
+    insert(lidarCloud(scene()));
     const auto before = snapshot();
     for (int i = 0; i < repeats; ++i) {
       auto msg = bad;
@@ -482,47 +428,47 @@ class RobustnessTest : public MappingNodeTest {
 };
 
 TEST_F(RobustnessTest, MissingEvidenceFieldIsRejected) {
-  auto msg = cloudOf(farWall());
+  auto msg = lidarCloud(farWall());
   msg.fields[3].name = "intensity";
   expectRejected(msg, "no semantic field");
 }
 
 TEST_F(RobustnessTest, WrongEvidenceCountIsRejected) {
-  expectRejected(cloudOf(farWall(), "lidar", kC - 1), "has count 19, expected C = 20");
+  expectRejected(lidarCloud(farWall(), "lidar", kC - 1), "has count 19, expected C = 20");
 }
 
 TEST_F(RobustnessTest, NanEvidenceIsRejected) {
-  auto msg = cloudOf(farWall());
+  auto msg = lidarCloud(farWall());
   setEvidence(&msg, 7, 3, std::nanf(""));
   expectRejected(msg, "point 7: evidence of class 3 is nan");
 }
 
 TEST_F(RobustnessTest, InfiniteEvidenceIsRejected) {
-  auto msg = cloudOf(farWall());
+  auto msg = lidarCloud(farWall());
   setEvidence(&msg, 8, 2, INFINITY);
   expectRejected(msg, "point 8: evidence of class 2 is inf");
 }
 
 TEST_F(RobustnessTest, NegativeEvidenceIsRejected) {
-  auto msg = cloudOf(farWall());
+  auto msg = lidarCloud(farWall());
   setEvidence(&msg, 9, 1, -2.f);
   expectRejected(msg, "point 9: evidence of class 1 is -2");
 }
 
 TEST_F(RobustnessTest, TruncatedDataIsRejected) {
-  auto msg = cloudOf(farWall());
+  auto msg = lidarCloud(farWall());
   msg.data.resize(msg.data.size() / 2);
   expectRejected(msg, "truncated data");
 }
 
 TEST_F(RobustnessTest, ZeroPointsIsRejected) {
-  expectRejected(cloudOf({}), "cloud has zero points");
+  expectRejected(lidarCloud({}), "cloud has zero points");
 }
 
 TEST_F(RobustnessTest, MissingTfDropsTheCloud) {
   // No transform map <- nowhere ever arrives: the MessageFilter drops the oldest cloud once
   // its queue is full, and the node says so.
-  expectRejected(cloudOf(farWall(), "nowhere"), "no transform nowhere -> map", 8);
+  expectRejected(lidarCloud(farWall(), "nowhere"), "no transform nowhere -> map", 8);
 }
 
 int main(int argc, char** argv) {
