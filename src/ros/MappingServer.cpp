@@ -1,14 +1,14 @@
 #include "MappingServer.h"
 
+#include <cv_bridge/cv_bridge.h>
+#include <diagnostic_msgs/DiagnosticArray.h>
+
 #include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <map>
 #include <optional>
 #include <sstream>
-
-#include <cv_bridge/cv_bridge.h>
-#include <diagnostic_msgs/DiagnosticArray.h>
 
 #include "camera_projection.h"
 #include "conversions.h"
@@ -31,9 +31,12 @@ octomap::pose6d toPose(const geometry_msgs::Transform& t) {
 
 const char* tfReason(tf2_ros::filter_failure_reasons::FilterFailureReason reason) {
   switch (reason) {
-    case tf2_ros::filter_failure_reasons::OutTheBack: return "older than the TF buffer";
-    case tf2_ros::filter_failure_reasons::EmptyFrameID: return "empty header.frame_id";
-    default: return "transform unavailable (queue overflow or timeout)";
+    case tf2_ros::filter_failure_reasons::OutTheBack:
+      return "older than the TF buffer";
+    case tf2_ros::filter_failure_reasons::EmptyFrameID:
+      return "empty header.frame_id";
+    default:
+      return "transform unavailable (queue overflow or timeout)";
   }
 }
 
@@ -69,11 +72,12 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   {
     std::ostringstream s;
     semantic_config_.print(s);
-    ROS_INFO_STREAM("evidential_mapping_node: frame " << config_.frame_id << ", resolution "
-                    << config_.resolution << " m, C = " << config_.num_classes << " ("
-                    << classes_.dataset << ", " << config_.classes << "), input "
-                    << config_.input_type << ", insertion queue " << config_.insert_queue_size
-                    << "\n" << s.str());
+    ROS_INFO_STREAM("evidential_mapping_node: frame "
+                    << config_.frame_id << ", resolution " << config_.resolution
+                    << " m, C = " << config_.num_classes << " (" << classes_.dataset << ", "
+                    << config_.classes << "), input " << config_.input_type << ", insertion queue "
+                    << config_.insert_queue_size << "\n"
+                    << s.str());
   }
 
   outputs_ = std::make_unique<MapOutputs>(nh_, config_);
@@ -120,8 +124,8 @@ void MappingServer::subscribeInputs() {
       cloud_sub_, tf_buffer_, config_.frame_id, config_.queue_size, intake_nh);
   tf_filter_->registerCallback(
       boost::bind(&MappingServer::cloudCallback, this, boost::placeholders::_1));
-  tf_filter_->registerFailureCallback(boost::bind(&MappingServer::tfFailure, this,
-                                                  boost::placeholders::_1, boost::placeholders::_2));
+  tf_filter_->registerFailureCallback(boost::bind(
+      &MappingServer::tfFailure, this, boost::placeholders::_1, boost::placeholders::_2));
   if (config_.use_camera) {
     image_sub_.subscribe(intake_nh, "image_in", 2);
     info_sub_.subscribe(intake_nh, "camera_info", 2);
@@ -139,8 +143,8 @@ void MappingServer::subscribeInputs() {
 }
 
 std::unique_ptr<EvidentialOcTree> MappingServer::makeTree() {
-  auto tree = std::make_unique<EvidentialOcTree>(config_.resolution, config_.num_classes,
-                                                 semantic_config_);
+  auto tree =
+      std::make_unique<EvidentialOcTree>(config_.resolution, config_.num_classes, semantic_config_);
   tree->setClassNames(classes_.names);
   if (tree_) {  // keep the sensor model in use (it may have been changed at run time)
     tree->setProbHit(tree_->getProbHit());
@@ -161,16 +165,16 @@ void MappingServer::tfFailure(const sensor_msgs::PointCloud2ConstPtr& cloud,
     std::lock_guard<std::mutex> lock(status_mutex_);
     ++status_.clouds_dropped_tf;
   }
-  warnDropped("cloud dropped: no transform " + cloud->header.frame_id + " -> " +
-              config_.frame_id + " (" + tfReason(reason) + "); map unchanged");
+  warnDropped("cloud dropped: no transform " + cloud->header.frame_id + " -> " + config_.frame_id +
+              " (" + tfReason(reason) + "); map unchanged");
 }
 
 void MappingServer::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& cloud) {
   PendingCloud pending;
   pending.cloud = cloud;
   try {
-    pending.T_W_S = tf_buffer_.lookupTransform(config_.frame_id, cloud->header.frame_id,
-                                               cloud->header.stamp);
+    pending.T_W_S =
+        tf_buffer_.lookupTransform(config_.frame_id, cloud->header.frame_id, cloud->header.stamp);
   } catch (const tf2::TransformException& e) {
     {
       std::lock_guard<std::mutex> lock(status_mutex_);
@@ -247,7 +251,8 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
   const auto t0 = std::chrono::steady_clock::now();
   InsertStats stats;
   try {
-    stats = tree_->insertSemanticScan(scan.points_S, scan.evidence, toPose(pending.T_W_S.transform));
+    stats =
+        tree_->insertSemanticScan(scan.points_S, scan.evidence, toPose(pending.T_W_S.transform));
   } catch (const std::invalid_argument& e) {
     {
       std::lock_guard<std::mutex> status_lock(status_mutex_);
@@ -269,11 +274,12 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
     status_.last_points = static_cast<uint32_t>(stats.points_in);
   }
   recordMapSize();
-  ROS_INFO("scan %zu: %zu points (%s), %zu semantic, %zu voxels updated, insert %.0f ms "
-           "(occupancy %.0f, kernel %.0f, update %.0f); map %zu leaves, %zu semantic; %zu waiting",
-           scans, stats.points_in, scan.source.c_str(), stats.semantic_points,
-           stats.voxels_updated, ms, stats.ms_occupancy, stats.ms_kernel, stats.ms_update,
-           tree_->getNumLeafNodes(), tree_->numSemanticNodes(), clouds_->size());
+  ROS_INFO(
+      "scan %zu: %zu points (%s), %zu semantic, %zu voxels updated, insert %.0f ms "
+      "(occupancy %.0f, kernel %.0f, update %.0f); map %zu leaves, %zu semantic; %zu waiting",
+      scans, stats.points_in, scan.source.c_str(), stats.semantic_points, stats.voxels_updated, ms,
+      stats.ms_occupancy, stats.ms_kernel, stats.ms_update, tree_->getNumLeafNodes(),
+      tree_->numSemanticNodes(), clouds_->size());
   outputs_->markStale();
   if (config_.publish_rate <= 0.0) publishMap(false);
 }
@@ -485,8 +491,7 @@ bool MappingServer::query(QueryMap::Request& req, QueryMap::Response& res) {
     res.labels.push_back(o.label);
     res.uncertainties.push_back(o.uncertainty);
     res.occupancy.push_back(node ? static_cast<float>(node->getOccupancy()) : -1.f);
-    for (int c = 0; c < C; ++c)
-      res.beliefs.push_back(c < int(o.belief.size()) ? o.belief[c] : 0.f);
+    for (int c = 0; c < C; ++c) res.beliefs.push_back(c < int(o.belief.size()) ? o.belief[c] : 0.f);
   }
   return true;
 }

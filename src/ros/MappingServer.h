@@ -10,14 +10,6 @@
 // the node's own callback queue; the map mutex serialises them with the insertion thread.
 #pragma once
 
-#include <atomic>
-#include <deque>
-#include <memory>
-#include <mutex>
-#include <string>
-#include <thread>
-
-#include <boost/thread/recursive_mutex.hpp>
 #include <dynamic_reconfigure/server.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <message_filters/subscriber.h>
@@ -31,6 +23,14 @@
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/message_filter.h>
 #include <tf2_ros/transform_listener.h>
+
+#include <atomic>
+#include <boost/thread/recursive_mutex.hpp>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
 
 #include "evidential_octomap/ClearBbx.h"
 #include "evidential_octomap/LoadMap.h"

@@ -1,10 +1,10 @@
 #include "map_outputs.h"
 
-#include <chrono>
-#include <cstdio>
-
 #include <sensor_msgs/PointCloud2.h>
 #include <visualization_msgs/MarkerArray.h>
+
+#include <chrono>
+#include <cstdio>
 
 #include "conversions.h"
 #include "visualization.h"

@@ -4,10 +4,10 @@
 // the next publish pass, and an output nobody listens to costs nothing.
 #pragma once
 
+#include <ros/ros.h>
+
 #include <string>
 #include <vector>
-
-#include <ros/ros.h>
 
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"

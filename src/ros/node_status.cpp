@@ -1,6 +1,7 @@
 #include "node_status.h"
 
 #include <cstdio>
+#include <utility>
 
 namespace evidential_octomap {
 namespace {
@@ -40,18 +41,20 @@ diagnostic_msgs::DiagnosticStatus toDiagnosticStatus(const MappingStatus& now,
                   static_cast<unsigned long long>(now.clouds_inserted));
   }
   d.message = text;
-  addValue(&d, "clouds received", now.clouds_received);
-  addValue(&d, "clouds inserted", now.clouds_inserted);
-  addValue(&d, "dropped: insertion queue full", now.clouds_dropped_queue);
-  addValue(&d, "dropped: unreadable", now.clouds_dropped_invalid);
-  addValue(&d, "dropped: no transform", now.clouds_dropped_tf);
-  addValue(&d, "queue length", now.queue_length);
-  addValue(&d, "queue capacity", now.queue_capacity);
-  addValue(&d, "last insert [ms]", now.last_insert_ms);
-  addValue(&d, "mean insert [ms]", now.mean_insert_ms);
-  addValue(&d, "map leaves", now.map_leaves);
-  addValue(&d, "map semantic leaves", now.map_semantic_leaves);
-  addValue(&d, "map memory [bytes]", now.map_memory_bytes);
+  const std::pair<const char*, double> values[] = {
+      {"clouds received", double(now.clouds_received)},
+      {"clouds inserted", double(now.clouds_inserted)},
+      {"dropped: insertion queue full", double(now.clouds_dropped_queue)},
+      {"dropped: unreadable", double(now.clouds_dropped_invalid)},
+      {"dropped: no transform", double(now.clouds_dropped_tf)},
+      {"queue length", double(now.queue_length)},
+      {"queue capacity", double(now.queue_capacity)},
+      {"last insert [ms]", double(now.last_insert_ms)},
+      {"mean insert [ms]", double(now.mean_insert_ms)},
+      {"map leaves", double(now.map_leaves)},
+      {"map semantic leaves", double(now.map_semantic_leaves)},
+      {"map memory [bytes]", double(now.map_memory_bytes)}};
+  for (const auto& [key, value] : values) addValue(&d, key, value);
   return d;
 }
 

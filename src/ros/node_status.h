@@ -3,10 +3,10 @@
 // (rqt_robot_monitor), so a node that falls behind says so.
 #pragma once
 
+#include <diagnostic_msgs/DiagnosticStatus.h>
+
 #include <cstdint>
 #include <string>
-
-#include <diagnostic_msgs/DiagnosticStatus.h>
 
 #include "evidential_octomap/MappingStatus.h"
 

@@ -2,14 +2,16 @@
 // spin loop with a hang guard (never a timing assertion).
 #pragma once
 
+#include <geometry_msgs/Point.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <ros/ros.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+
 #include <cstring>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <geometry_msgs/Point.h>
-#include <ros/ros.h>
-#include <sensor_msgs/PointCloud2.h>
 
 namespace node_test {
 
@@ -75,6 +77,17 @@ inline geometry_msgs::Point gp(double x, double y, double z) {
   p.y = y;
   p.z = z;
   return p;
+}
+
+// The tests' sensor: frame "lidar" at (1, 0, 0) in "map", static.
+inline void sendLidarTransform(tf2_ros::StaticTransformBroadcaster* broadcaster) {
+  geometry_msgs::TransformStamped t;
+  t.header.stamp = ros::Time(0);
+  t.header.frame_id = "map";
+  t.child_frame_id = "lidar";
+  t.transform.translation.x = 1.0;
+  t.transform.rotation.w = 1.0;
+  broadcaster->sendTransform(t);
 }
 
 // Spins until `done` holds; false after `timeout_s` (a hang guard, not a timing assertion).

@@ -1,10 +1,10 @@
 // LatestQueue: the node's bounded queue of the newest clouds. Full → the oldest item is pushed
 // out and handed back (so it can be counted); pop is FIFO; close wakes a waiting consumer.
+#include <gtest/gtest.h>
+
 #include <atomic>
 #include <thread>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "latest_queue.h"
 

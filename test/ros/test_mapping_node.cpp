@@ -55,8 +55,8 @@ std::vector<Point> scene(float wall_x = 4.05f, int wall_class = kBuilding) {
   return pts;
 }
 
-sensor_msgs::PointCloud2 lidarCloud(const std::vector<Point>& pts, const std::string& frame = "lidar",
-                                 int count = kC) {
+sensor_msgs::PointCloud2 lidarCloud(const std::vector<Point>& pts,
+                                    const std::string& frame = "lidar", int count = kC) {
   return node_test::cloudOf(pts, frame, count);
 }
 
@@ -73,13 +73,7 @@ class MappingNodeTest : public ::testing::Test {
         nh_.subscribe("uncertainty_cells_vis_array", 1, &MappingNodeTest::onUncertainty, this);
     cloud_sub_ = nh_.subscribe("semantic_cloud", 1, &MappingNodeTest::onCloud, this);
     rosout_sub_ = nh_.subscribe("/rosout", 100, &MappingNodeTest::onLog, this);
-    geometry_msgs::TransformStamped t;
-    t.header.stamp = ros::Time(0);
-    t.header.frame_id = "map";
-    t.child_frame_id = "lidar";
-    t.transform.translation.x = 1.0;
-    t.transform.rotation.w = 1.0;
-    tf_.sendTransform(t);
+    node_test::sendLidarTransform(&tf_);
     ASSERT_TRUE(ros::service::waitForService(kNode + "/query", ros::Duration(60)));
     ASSERT_TRUE(waitFor([&] { return cloud_pub_.getNumSubscribers() > 0; }));
     ASSERT_TRUE(waitFor([&] {

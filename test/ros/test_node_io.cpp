@@ -4,10 +4,6 @@
 //  - No silent drops: a burst of clouds faster than the insertion thread is either inserted or
 //    counted as dropped, cloud for cloud; the node warns, ~status and /diagnostics say so, and
 //    the newest cloud is the one that gets mapped.
-#include <functional>
-#include <string>
-#include <vector>
-
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
@@ -17,6 +13,10 @@
 #include <std_srvs/Empty.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
+
+#include <functional>
+#include <string>
+#include <vector>
 
 #include "evidential_octomap/EvidentialMap.h"
 #include "evidential_octomap/MappingStatus.h"
@@ -40,12 +40,7 @@ class NodeIoTest : public ::testing::Test {
   void SetUp() override {
     cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("cloud_in", 20);
     status_sub_ = nh_.subscribe(kNode + "/status", 10, &NodeIoTest::onStatus, this);
-    geometry_msgs::TransformStamped t;
-    t.header.frame_id = "map";
-    t.child_frame_id = "lidar";
-    t.transform.translation.x = 1.0;
-    t.transform.rotation.w = 1.0;
-    tf_.sendTransform(t);
+    node_test::sendLidarTransform(&tf_);
     ASSERT_TRUE(ros::service::waitForService(kNode + "/query", ros::Duration(60)));
     ASSERT_TRUE(waitFor([&] { return cloud_pub_.getNumSubscribers() > 0 && status_; }));
   }
@@ -118,8 +113,8 @@ TEST_F(NodeIoTest, LateSubscribersGetEveryView) {
 
 TEST_F(NodeIoTest, EveryCloudOfABurstIsInsertedOrCountedAsDropped) {
   std::vector<std::string> warnings;
-  ros::Subscriber rosout = nh_.subscribe<rosgraph_msgs::Log>(
-      "/rosout", 100, [&](const rosgraph_msgs::LogConstPtr& m) {
+  ros::Subscriber rosout =
+      nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::LogConstPtr& m) {
         if (m->name == kNode && m->level == rosgraph_msgs::Log::WARN) warnings.push_back(m->msg);
       });
   bool diagnosed_warn = false;
@@ -132,8 +127,8 @@ TEST_F(NodeIoTest, EveryCloudOfABurstIsInsertedOrCountedAsDropped) {
       });
   // /rosout is not latched: see one of the node's own lines (a reset) before the burst.
   bool connected = false;
-  ros::Subscriber hello = nh_.subscribe<rosgraph_msgs::Log>(
-      "/rosout", 100, [&](const rosgraph_msgs::LogConstPtr& m) {
+  ros::Subscriber hello =
+      nh_.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::LogConstPtr& m) {
         connected = connected || (m->name == kNode && m->msg.find("reset:") == 0);
       });
   ASSERT_TRUE(waitFor([&] {
@@ -150,8 +145,8 @@ TEST_F(NodeIoTest, EveryCloudOfABurstIsInsertedOrCountedAsDropped) {
   constexpr int kBurst = 10;
   const auto far = node_test::cloudOf(
       node_test::wall(40.05f, -40.f, 40.f, -2.f, 18.f, 0.2f, kBuilding), "lidar", kC);
-  const auto last = node_test::cloudOf(
-      node_test::wall(20.05f, 8.f, 10.f, 0.f, 1.f, 0.05f, kPole), "lidar", kC);
+  const auto last =
+      node_test::cloudOf(node_test::wall(20.05f, 8.f, 10.f, 0.f, 1.f, 0.05f, kPole), "lidar", kC);
   for (int i = 0; i < kBurst; ++i) {
     auto msg = i + 1 < kBurst ? far : last;
     msg.header.stamp = ros::Time::now();

@@ -1,9 +1,9 @@
 // toDiagnosticStatus: OK while nothing was dropped since the last report, WARN naming each
 // reason otherwise, and every counter as a key/value pair.
+#include <gtest/gtest.h>
+
 #include <map>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "node_status.h"
 
