@@ -4,12 +4,14 @@
 #   1. installs missing Debian packages (scripts/install_deps.sh; a no-op when all are present);
 #   2. core, tools and their tests with plain CMake in build/core (Release), gated on ctest;
 #   3. the catkin package (core + ROS node, messages, rostests) in the workspace
-#      build/.catkin_ws (src/evidential_octomap -> this repository), gated on catkin_test_results.
+#      build/.catkin_ws (src/evidential_octomap -> this repository), gated on catkin_test_results;
+#   4. the Python package: `pip install .` into the virtual environment build/python-venv
+#      (skipped when its sources are unchanged since the last install), then pytest.
 #
 # Both builds are incremental, so a second run only re-runs the tests. JOBS=N sets parallelism
 # (default 2). Exits non-zero when anything fails. The last line is always
 #     tests: N passed, M failed
-# with N and M summed over ctest and catkin_test_results. A stage that fails before it can report
+# with N and M summed over ctest, catkin_test_results and pytest. A stage that fails before it can report
 # test counts (configure or build error, ctest crash) adds 1 to M, so a failing run never reads
 # "0 failed".
 set -euo pipefail
@@ -57,6 +59,19 @@ count_catkin() {
   failed=$((failed + errors + failures))
 }
 
+# Adds the counts of pytest's closing line ("3 failed, 40 passed, 1 skipped in 9.1s").
+# Returns 1 when the log has no such line.
+count_pytest() {
+  local line n_passed n_failed n_errors
+  line="$(grep -E '^=*[ ]*([0-9]+ (passed|failed|errors?|skipped|deselected|xfailed|xpassed|warnings?)(, )?)+ in [0-9.]+s' "$1" |
+    tail -n 1)" || return 1
+  n_passed="$(grep -oE '[0-9]+ passed' <<<"${line}" | grep -oE '[0-9]+' || echo 0)"
+  n_failed="$(grep -oE '[0-9]+ failed' <<<"${line}" | grep -oE '[0-9]+' || echo 0)"
+  n_errors="$(grep -oE '[0-9]+ errors?' <<<"${line}" | grep -oE '[0-9]+' || echo 0)"
+  passed=$((passed + n_passed))
+  failed=$((failed + n_failed + n_errors))
+}
+
 stage_failed() {
   failed_stages+=("$1")
   echo "test.sh: FAILED: $1" >&2
@@ -82,10 +97,11 @@ finish() {
 trap finish EXIT
 
 # For unit-testing the two parsers above without building anything:
-#   bash scripts/test.sh --self-test-parsers ctest.log catkin.log
+#   bash scripts/test.sh --self-test-parsers ctest.log catkin.log [pytest.log]
 if [[ "${1:-}" == "--self-test-parsers" ]]; then
   count_ctest "$2" || echo "no ctest summary in $2"
   count_catkin "$3" || echo "no catkin summary in $3"
+  [[ -z "${4:-}" ]] || count_pytest "$4" || echo "no pytest summary in $4"
   exit 0
 fi
 
@@ -177,6 +193,59 @@ else
     fi
   else
     stage_failed "catkin build"
+    failed=$((failed + 1))
+  fi
+fi
+
+# ---- 4. Python package: pip install . into a venv, then pytest --------------------------------
+py_venv="build/python-venv"
+py_stamp="${py_venv}/.installed-sources"
+
+# Content hash of everything the wheel is built from, so an unchanged tree skips pip.
+python_sources_hash() {
+  find pyproject.toml CMakeLists.txt cmake python/src python/evidential_octomap include src/core \
+    src/tools/dataset.cpp src/tools/dataset.h src/tools/evidence_sources.cpp \
+    src/tools/evidence_sources.h config -type f ! -name '*.pyc' -print0 |
+    sort -z | xargs -0 sha1sum | sha1sum | cut -d' ' -f1
+}
+
+python_install() {
+  [[ -x "${py_venv}/bin/python" ]] || /usr/bin/python3 -m venv "${py_venv}" || return 1
+  local hash
+  hash="$(python_sources_hash)"
+  if [[ -f "${py_stamp}" && "$(cat "${py_stamp}")" == "${hash}" ]]; then
+    echo "test.sh: the Python package is up to date in ${py_venv}"
+    return 0
+  fi
+  rm -f "${py_stamp}"
+  # The build backend is installed once so that re-installs reuse build/python (incremental).
+  "${py_venv}/bin/pip" install -q "scikit-build-core>=0.10" "nanobind>=2.4" || return 1
+  "${py_venv}/bin/pip" install -q --no-build-isolation ".[test]" || return 1
+  echo "${hash}" >"${py_stamp}"
+}
+
+if ((!core_built)); then
+  echo "test.sh: skipping the Python stage: the core does not build"
+else
+  note "python: pip install . (${py_venv}) and pytest"
+  t0=${SECONDS}
+  if python_install 2>&1 | tee "${logs}/pip.log"; [[ ${PIPESTATUS[0]} -eq 0 ]]; then
+    echo "test.sh: Python package installed in $((SECONDS - t0)) s"
+    t0=${SECONDS}
+    set +e
+    EVIDENTIAL_OCTOMAP_CLI="${root}/${core_dir}/src/tools/evidential_octomap" \
+      "${py_venv}/bin/python" -m pytest -p no:cacheprovider python/tests 2>&1 | tee "${logs}/pytest.log"
+    pytest_rc=${PIPESTATUS[0]}
+    set -e
+    echo "test.sh: pytest ran in $((SECONDS - t0)) s (exit ${pytest_rc})"
+    if ! count_pytest "${logs}/pytest.log"; then
+      stage_failed "pytest (no summary)"
+      failed=$((failed + 1))
+    elif ((pytest_rc != 0)); then
+      stage_failed "pytest"
+    fi
+  else
+    stage_failed "pip install ."
     failed=$((failed + 1))
   fi
 fi

@@ -1,6 +1,7 @@
 // Files: atomic .ot / .bt saves, a checked .ot loader, and export to OctoMap's ColorOcTree.
 #pragma once
 
+#include <iosfwd>
 #include <memory>
 #include <string>
 
@@ -22,6 +23,9 @@ void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path);
 // Reads an .ot written by saveMap. Throws std::runtime_error for a missing path, a file that is
 // not an OctoMap file, a file of another tree type, or corrupt/truncated data.
 std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path);
+// The same checks on a stream holding .ot bytes (e.g. a map sent between processes); `path`
+// names the source in error messages.
+std::unique_ptr<EvidentialOcTree> loadMap(std::istream& in, const std::string& path);
 
 enum class ColorMode { kClass, kUncertainty };
 

@@ -98,6 +98,10 @@ struct OtHeader : octomap::AbstractOcTree {
 std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open " + path + ": " + std::strerror(errno));
+  return loadMap(in, path);
+}
+
+std::unique_ptr<EvidentialOcTree> loadMap(std::istream& in, const std::string& path) {
   // The header is checked before any data is read: data of other tree types never reaches
   // OctoMap's readers (which trust their input: no depth limit), and our data is read even when
   // `size` is 0, because an empty map still carries its semantic header (C, names, rule).

@@ -1,0 +1,327 @@
+// EvidentialOcTree with numpy in and out: insert a scan, query points, export leaves, files,
+// merge, ColorOcTree export. The GIL is released while C++ works on whole arrays.
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/optional.h>
+#include <nanobind/stl/string.h>
+#include <nanobind/stl/unique_ptr.h>
+#include <nanobind/stl/vector.h>
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "bindings.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/io.h"
+
+namespace evidential_octomap::python {
+
+namespace {
+
+// What query() returns for N points.
+struct QueryResult {
+  Array<int32_t> labels;     // (N,) argmax class, -1 without semantic evidence
+  Array<float> belief;       // (N, C)
+  Array<float> uncertainty;  // (N,)
+  Array<bool> occupied;      // (N,) the voxel is known and occupied
+  Array<bool> known;         // (N,) the voxel exists in the map (observed)
+};
+
+// Every leaf of the map (pruned blocks are one leaf of their own size).
+struct Leaves {
+  Array<float> centers;      // (M, 3)
+  Array<float> sizes;        // (M,) edge length [m]
+  Array<float> occupancy;    // (M,) probability
+  Array<int32_t> labels;     // (M,)
+  Array<float> uncertainty;  // (M,)
+  Array<float> belief;       // (M, C)
+};
+
+void checkRows(const MatrixIn& evidence, size_t points, int num_classes) {
+  if (evidence.shape(0) != points || evidence.shape(1) != size_t(num_classes)) {
+    throw std::invalid_argument("evidence has shape (" + std::to_string(evidence.shape(0)) + ", " +
+                                std::to_string(evidence.shape(1)) + "), expected (" +
+                                std::to_string(points) + ", " + std::to_string(num_classes) +
+                                ") = (points, classes)");
+  }
+}
+
+InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const MatrixIn& evidence,
+                       std::optional<std::array<double, 3>> origin, std::optional<PoseIn> pose) {
+  if (origin.has_value() == pose.has_value()) {
+    throw std::invalid_argument(
+        "give exactly one of origin (points in the map frame) or pose "
+        "(4x4 sensor-to-map transform, points in the sensor frame)");
+  }
+  checkRows(evidence, points.shape(0), tree.numClasses());
+  nb::gil_scoped_release release;
+  std::vector<float> values(evidence.data(), evidence.data() + evidence.size());
+  if (pose) {
+    const auto T = pose->view();
+    return tree.insertSemanticScan(toPointcloud(points, *pose), values,
+                                   octomap::point3d(T(0, 3), T(1, 3), T(2, 3)));
+  }
+  const std::array<double, 3>& o = *origin;
+  return tree.insertSemanticScan(toPointcloud(points), values, octomap::point3d(o[0], o[1], o[2]));
+}
+
+QueryResult query(const EvidentialOcTree& tree, const PointsIn& points) {
+  const size_t n = points.shape(0);
+  const int num_classes = tree.numClasses();
+  std::vector<int32_t> labels(n);
+  std::vector<float> belief(n * num_classes), uncertainty(n);
+  std::vector<uint8_t> occupied(n), known(n);
+  {
+    nb::gil_scoped_release release;
+    const auto p = points.view();
+    const double extent = tree.getResolution() * 32768.0;  // beyond it there are no keys
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < n; ++i) {
+      const octomap::point3d point(p(i, 0), p(i, 1), p(i, 2));
+      const EvidentialOcTreeNode* node = nullptr;
+      octomap::OcTreeKey key;
+      if (std::fabs(point.x()) < extent && std::fabs(point.y()) < extent &&
+          std::fabs(point.z()) < extent && tree.coordToKeyChecked(point, key)) {
+        node = tree.search(key);
+      }
+      const VoxelOpinion o = tree.opinion(node);
+      labels[i] = o.label;
+      uncertainty[i] = o.uncertainty;
+      std::copy(o.belief.begin(), o.belief.end(), belief.begin() + i * num_classes);
+      known[i] = node != nullptr;
+      occupied[i] = node != nullptr && tree.isNodeOccupied(node);
+    }
+  }
+  return {toNumpy(std::move(labels), {n}), toNumpy(std::move(belief), {n, size_t(num_classes)}),
+          toNumpy(std::move(uncertainty), {n}), toNumpyBool(std::move(occupied)),
+          toNumpyBool(std::move(known))};
+}
+
+Leaves leaves(const EvidentialOcTree& tree, bool occupied_only) {
+  const int num_classes = tree.numClasses();
+  std::vector<float> centers, sizes, occupancy, uncertainty, belief;
+  std::vector<int32_t> labels;
+  {
+    nb::gil_scoped_release release;
+    for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+      if (occupied_only && !tree.isNodeOccupied(*it)) continue;
+      const octomap::point3d c = it.getCoordinate();
+      centers.insert(centers.end(), {c.x(), c.y(), c.z()});
+      sizes.push_back(static_cast<float>(it.getSize()));
+      occupancy.push_back(static_cast<float>(it->getOccupancy()));
+      const VoxelOpinion o = tree.opinion(&*it);
+      labels.push_back(o.label);
+      uncertainty.push_back(o.uncertainty);
+      belief.insert(belief.end(), o.belief.begin(), o.belief.end());
+    }
+  }
+  const size_t m = sizes.size();
+  return {
+      toNumpy(std::move(centers), {m, 3}),  toNumpy(std::move(sizes), {m}),
+      toNumpy(std::move(occupancy), {m}),   toNumpy(std::move(labels), {m}),
+      toNumpy(std::move(uncertainty), {m}), toNumpy(std::move(belief), {m, size_t(num_classes)})};
+}
+
+nb::bytes toBytes(const EvidentialOcTree& tree) {
+  std::ostringstream out;
+  {
+    nb::gil_scoped_release release;
+    out << std::setprecision(17);  // AbstractOcTree::write prints the resolution as text
+    if (!tree.write(out)) throw std::runtime_error("serialising the map failed");
+  }
+  const std::string data = out.str();
+  return nb::bytes(data.data(), data.size());
+}
+
+std::unique_ptr<EvidentialOcTree> fromBytes(nb::bytes data) {
+  std::istringstream in(std::string(data.c_str(), data.size()));
+  nb::gil_scoped_release release;
+  return loadMap(in, "<bytes>");
+}
+
+std::unique_ptr<EvidentialOcTree> makeTree(double resolution, const std::vector<std::string>& names,
+                                           const std::optional<SemanticConfig>& config) {
+  auto tree = std::make_unique<EvidentialOcTree>(resolution, static_cast<int>(names.size()),
+                                                 config.value_or(SemanticConfig()));
+  tree->setClassNames(names);
+  return tree;
+}
+
+ColorMode colorModeFromName(const std::string& mode) {
+  if (mode == "class") return ColorMode::kClass;
+  if (mode == "uncertainty") return ColorMode::kUncertainty;
+  throw std::invalid_argument("colour mode must be 'class' or 'uncertainty', got '" + mode + "'");
+}
+
+void bindResults(nb::module_& m) {
+  nb::class_<QueryResult>(m, "QueryResult", "Per-point answers of EvidentialOcTree.query.")
+      .def_ro("labels", &QueryResult::labels, kShared,
+              "(N,) int32 argmax class, -1 without evidence.")
+      .def_ro("belief", &QueryResult::belief, kShared,
+              "(N, C) float32: dempster belief masses; sbki/ebs expected probabilities.")
+      .def_ro("uncertainty", &QueryResult::uncertainty, kShared,
+              "(N,) float32: dempster mass u; sbki/ebs Dirichlet variance of the label.")
+      .def_ro("occupied", &QueryResult::occupied, kShared,
+              "(N,) bool: the voxel is known and occupied.")
+      .def_ro("known", &QueryResult::known, kShared, "(N,) bool: the voxel has been observed.");
+  nb::class_<Leaves>(m, "Leaves", "Every leaf of a map as arrays (pruned blocks are one leaf).")
+      .def_ro("centers", &Leaves::centers, kShared, "(M, 3) float32 centre [m].")
+      .def_ro("sizes", &Leaves::sizes, kShared, "(M,) float32 edge length [m].")
+      .def_ro("occupancy", &Leaves::occupancy, kShared, "(M,) float32 occupancy probability.")
+      .def_ro("labels", &Leaves::labels, kShared, "(M,) int32 argmax class, -1 without evidence.")
+      .def_ro("uncertainty", &Leaves::uncertainty, kShared, "(M,) float32.")
+      .def_ro("belief", &Leaves::belief, kShared, "(M, C) float32.");
+  nb::class_<InsertStats>(m, "InsertStats", "What one insert_scan did.")
+      .def_ro("points_in", &InsertStats::points_in)
+      .def_ro("points_skipped", &InsertStats::points_skipped,
+              "Non-finite or outside the tree's key range.")
+      .def_ro("points_beyond_range", &InsertStats::points_beyond_range)
+      .def_ro("semantic_points", &InsertStats::semantic_points, "Left after down-sampling.")
+      .def_ro("points_dropped_uncertain", &InsertStats::points_dropped_uncertain)
+      .def_ro("uncertainty_threshold", &InsertStats::uncertainty_threshold)
+      .def_ro("voxels_updated", &InsertStats::voxels_updated)
+      .def_ro("ms_occupancy", &InsertStats::ms_occupancy)
+      .def_ro("ms_kernel", &InsertStats::ms_kernel)
+      .def_ro("ms_update", &InsertStats::ms_update);
+}
+
+void bindColorTree(nb::module_& m) {
+  nb::class_<octomap::ColorOcTree>(m, "ColorOcTree",
+                                   "OctoMap's ColorOcTree (opens in octovis and stock tools).")
+      .def(
+          "save",
+          [](const octomap::ColorOcTree& tree, const std::string& path) {
+            if (!const_cast<octomap::ColorOcTree&>(tree).write(path)) {
+              throw std::runtime_error("cannot write " + path);
+            }
+          },
+          nb::arg("path"), "Writes an .ot file.")
+      .def_prop_ro("num_leaves", &octomap::ColorOcTree::getNumLeafNodes)
+      .def_prop_ro("resolution", &octomap::ColorOcTree::getResolution)
+      .def(
+          "colors",
+          [](const octomap::ColorOcTree& tree, const PointsIn& points) {
+            const size_t n = points.shape(0);
+            std::vector<uint8_t> rgb(n * 3, 0);
+            const auto p = points.view();
+            for (size_t i = 0; i < n; ++i) {
+              const auto* node = tree.search(p(i, 0), p(i, 1), p(i, 2));
+              if (!node) continue;
+              const auto c = node->getColor();
+              rgb[i * 3] = c.r;
+              rgb[i * 3 + 1] = c.g;
+              rgb[i * 3 + 2] = c.b;
+            }
+            return toNumpy(std::move(rgb), {n, 3});
+          },
+          nb::arg("points"), "(N, 3) uint8 colour of each point's voxel (0 where unknown).");
+}
+
+}  // namespace
+
+void bindTree(nb::module_& m) {
+  bindResults(m);
+  bindColorTree(m);
+  using Tree = EvidentialOcTree;
+  nb::class_<Tree>(m, "EvidentialOcTree",
+                   "An OctoMap occupancy tree whose voxels also fuse per-point semantic evidence.")
+      .def(nb::new_([](double resolution, int classes, std::optional<SemanticConfig> config) {
+             return std::make_unique<Tree>(resolution, classes, config.value_or(SemanticConfig()));
+           }),
+           nb::arg("resolution"), nb::arg("classes") = 1, nb::arg("config") = nb::none(),
+           "classes: the number of classes C (names class_<i>).")
+      .def(nb::new_([](double resolution, const std::vector<std::string>& classes,
+                       std::optional<SemanticConfig> config) {
+             return makeTree(resolution, classes, config);
+           }),
+           nb::arg("resolution"), nb::arg("classes"), nb::arg("config") = nb::none(),
+           "classes: the class names.")
+      .def(nb::new_([](double resolution, const ClassTable& classes,
+                       std::optional<SemanticConfig> config) {
+             return makeTree(resolution, classes.names, config);
+           }),
+           nb::arg("resolution"), nb::arg("classes"), nb::arg("config") = nb::none(),
+           "classes: a ClassTable (its names are used).")
+      // --- settings
+      .def_prop_ro("resolution", &Tree::getResolution)
+      .def_prop_ro("num_classes", &Tree::numClasses)
+      .def_prop_rw("class_names", &Tree::classNames, &Tree::setClassNames)
+      .def_prop_ro(
+          "config", [](const Tree& t) { return t.config(); }, "A copy of the mapping parameters.")
+      .def("set_config", &Tree::setConfig, nb::arg("config"),
+           "Replaces the parameters; a rule change is refused while the map holds evidence.")
+      .def_prop_ro("rule", [](const Tree& t) { return t.rule().name(); })
+      .def_prop_rw("prob_hit", &Tree::getProbHit, &Tree::setProbHit)
+      .def_prop_rw("prob_miss", &Tree::getProbMiss, &Tree::setProbMiss)
+      .def_prop_rw("clamping_thres_min", &Tree::getClampingThresMin, &Tree::setClampingThresMin)
+      .def_prop_rw("clamping_thres_max", &Tree::getClampingThresMax, &Tree::setClampingThresMax)
+      .def_prop_rw("occupancy_thres", &Tree::getOccupancyThres,
+                   nb::overload_cast<double>(&Tree::setOccupancyThres))
+      // --- size
+      .def_prop_ro("num_nodes", &Tree::size)
+      .def_prop_ro("num_leaves", [](const Tree& t) { return t.getNumLeafNodes(); })
+      .def_prop_ro("num_semantic_nodes", &Tree::numSemanticNodes)
+      .def_prop_ro("memory_usage", &Tree::memoryUsage, "Bytes.")
+      .def(
+          "bounds",
+          [](const Tree& t) {
+            double x0, y0, z0, x1, y1, z1;
+            t.getMetricMin(x0, y0, z0);
+            t.getMetricMax(x1, y1, z1);
+            return toNumpy(std::vector<double>{x0, y0, z0, x1, y1, z1}, {2, 3});
+          },
+          "(2, 3) min and max corner of the known space [m].")
+      // --- integration and queries
+      .def("insert_scan", &insertScan, nb::arg("points"), nb::arg("evidence"), nb::kw_only(),
+           nb::arg("origin") = nb::none(), nb::arg("pose") = nb::none(),
+           "Inserts one scan: points (N, 3) and evidence (N, C) >= 0. With origin (3,), points "
+           "are in the map frame; with pose (4, 4) sensor-to-map, in the sensor frame. Raises "
+           "ValueError, leaving the map unchanged, for malformed evidence.")
+      .def("query", &query, nb::arg("points"), "Opinion and occupancy of each point's voxel.")
+      .def("leaves", &leaves, nb::arg("occupied_only") = false, "Every leaf as arrays.")
+      // --- files and maps
+      .def(
+          "save", [](const Tree& t, const std::string& path) { saveMap(t, path); }, nb::arg("path"),
+          "Writes the .ot atomically; raises RuntimeError naming the problem.")
+      .def(
+          "save_occupancy",
+          [](const Tree& t, const std::string& path) { saveBinaryOccupancy(t, path); },
+          nb::arg("path"), "Occupancy-only OctoMap binary (.bt) for stock OctoMap tools.")
+      .def_static(
+          "load", [](const std::string& path) { return loadMap(path); }, nb::arg("path"),
+          "Reads an .ot; raises RuntimeError for missing, foreign or corrupt files.")
+      .def("to_bytes", &toBytes, "The .ot file's bytes.")
+      .def_static("from_bytes", &fromBytes, nb::arg("data"), "Inverse of to_bytes.")
+      .def(
+          "merge",
+          [](Tree& t, const Tree& other) {
+            nb::gil_scoped_release release;
+            t.merge(other);
+          },
+          nb::arg("other"),
+          "Fuses a map of equal resolution, C and rule into this one (Dempster's rule in "
+          "evidence space; occupancy log-odds add, clamped).")
+      .def(
+          "to_color_octree",
+          [](const Tree& t, const ClassTable& classes, const std::string& mode) {
+            return toColorOcTree(t, classes, colorModeFromName(mode));
+          },
+          nb::arg("classes"), nb::arg("mode") = "class",
+          "ColorOcTree coloured by class ('class') or uncertainty ('uncertainty').")
+      .def("copy", [](const Tree& t) { return std::make_unique<Tree>(t); })
+      .def("__copy__", [](const Tree& t) { return std::make_unique<Tree>(t); })
+      .def("clear", &Tree::clear)
+      .def("__getstate__", &toBytes)
+      .def("__setstate__",
+           [](Tree& self, nb::bytes data) {
+             std::unique_ptr<Tree> loaded = fromBytes(data);
+             new (&self) Tree(*loaded);
+           })
+      .def("__repr__", [](const Tree& t) {
+        return "EvidentialOcTree(resolution=" + std::to_string(t.getResolution()) +
+               ", classes=" + std::to_string(t.numClasses()) + ", rule='" + t.rule().name() +
+               "', leaves=" + std::to_string(t.getNumLeafNodes()) + ")";
+      });
+}
+
+}  // namespace evidential_octomap::python

@@ -1,0 +1,51 @@
+// Shared by the binding files: one bind function per area, and the numpy conversions they use.
+// Arrays cross the boundary as whole buffers (no per-point Python work); inputs of another dtype
+// or layout are converted by nanobind (one copy), outputs are new numpy arrays owned by Python.
+#pragma once
+
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+#include <octomap/Pointcloud.h>
+
+#include <cstddef>
+#include <initializer_list>
+#include <memory>
+#include <vector>
+
+namespace evidential_octomap::python {
+
+namespace nb = nanobind;
+
+using PointsIn = nb::ndarray<const float, nb::shape<-1, 3>, nb::c_contig, nb::device::cpu>;
+using MatrixIn = nb::ndarray<const float, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+using LabelsIn = nb::ndarray<const int32_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+using PoseIn = nb::ndarray<const double, nb::shape<4, 4>, nb::c_contig, nb::device::cpu>;
+
+template <typename T>
+using Array = nb::ndarray<nb::numpy, T>;
+// Policy of properties that return arrays: the numpy array is shared, never copied (nanobind's
+// default for properties, reference_internal, refuses arrays that own their memory).
+constexpr auto kShared = nb::rv_policy::automatic;
+
+// A numpy array that takes ownership of `data` (shape must match its size).
+template <typename T>
+Array<T> toNumpy(std::vector<T>&& data, std::initializer_list<size_t> shape) {
+  auto* owner = new std::vector<T>(std::move(data));
+  nb::capsule free_when_done(owner,
+                             [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
+  return Array<T>(owner->data(), shape.size(), shape.begin(), free_when_done);
+}
+// numpy bool array from 0/1 bytes (std::vector<bool> has no buffer).
+Array<bool> toNumpyBool(std::vector<uint8_t>&& flags);
+
+// (N, 3) points as an OctoMap cloud; with a pose, transformed by it in double precision.
+octomap::Pointcloud toPointcloud(const PointsIn& points);
+octomap::Pointcloud toPointcloud(const PointsIn& points, const PoseIn& T_W_S);
+
+void bindClassTable(nb::module_& m);
+void bindConfig(nb::module_& m);
+void bindTree(nb::module_& m);
+void bindDataset(nb::module_& m);
+void bindMetrics(nb::module_& m);
+
+}  // namespace evidential_octomap::python

@@ -1,0 +1,105 @@
+"""The module on the bundled SemanticKITTI scans (evidence derived from hard labels): metrics
+recomputed in numpy, parity with the CLI, and inserts that release the GIL."""
+import os
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import evidential_octomap as eo
+from conftest import KITTI, REPO
+
+
+def mapped(kitti_scans, kitti_classes, count):
+    tree = eo.EvidentialOcTree(0.2, kitti_classes)
+    for scan, evidence in kitti_scans[:count]:
+        tree.insert_scan(scan.points_world(), evidence, origin=scan.origin)
+    return tree
+
+
+def test_dataset_reader(kitti, kitti_scans):
+    assert len(kitti) == 10 and kitti.has_labels and kitti.has_predictions
+    scan, evidence = kitti_scans[1]
+    assert scan.name == "000001" and scan.points.shape == (len(scan), 3)
+    assert scan.gt.shape == scan.predicted.shape == (len(scan),)
+    np.testing.assert_array_equal(scan.pose, kitti.pose(1))
+    world = scan.points.astype(np.float64) @ scan.pose[:3, :3].T + scan.pose[:3, 3]
+    np.testing.assert_allclose(scan.points_world(), world, atol=1e-4)
+    # onehot, E = 20: the predicted class gets 20, every other class 0.
+    assert evidence.shape == (len(scan), 20)
+    np.testing.assert_array_equal(evidence.argmax(axis=1), scan.predicted)
+    assert (evidence.sum(axis=1) == 20.0).all()
+    assert eo.evidence_is_derived("onehot") and not eo.evidence_is_derived("file")
+    with pytest.raises(RuntimeError, match="no evidence|has none"):
+        eo.derive_evidence(scan, 20, "file")
+    with pytest.raises(IndexError, match="scan 10 of 10"):
+        kitti.load(10)
+
+
+def test_map_metrics_equal_a_numpy_recomputation(kitti_scans, kitti_classes):
+    tree = mapped(kitti_scans, kitti_classes, 2)
+    scan, _ = kitti_scans[2]
+    keep = scan.gt != kitti_classes.ignore_class
+    points, gt = scan.points_world()[keep], scan.gt[keep]
+    metrics = eo.evaluate_map(tree, points, gt, scan.predicted[keep], kitti_classes.ignore_class)
+    answer = tree.query(points)
+    covered = answer.occupied
+    assert metrics.queries == len(gt) and metrics.covered == covered.sum()
+    assert metrics.occupied_accuracy == pytest.approx(covered.mean())
+    predicted, truth = answer.labels[covered], gt[covered]
+    assert metrics.accuracy == pytest.approx((predicted == truth).mean())
+    ious = []
+    for c in range(kitti_classes.num_classes):
+        if c == kitti_classes.ignore_class or not (truth == c).any():
+            continue
+        tp = ((predicted == c) & (truth == c)).sum()
+        ious.append(tp / ((predicted == c) | (truth == c)).sum())
+    assert metrics.miou == pytest.approx(np.mean(ious))
+    assert metrics.confusion.sum() == covered.sum()
+    inputs = eo.evaluate_predictions(gt, scan.predicted[keep], 20, kitti_classes.ignore_class)
+    assert inputs.accuracy == pytest.approx((scan.predicted[keep] == gt).mean())
+
+
+def cli_binary():
+    path = Path(os.environ.get("EVIDENTIAL_OCTOMAP_CLI",
+                               REPO / "build" / "core" / "src" / "tools" / "evidential_octomap"))
+    return path if path.is_file() else None
+
+
+@pytest.mark.skipif(cli_binary() is None, reason="the CLI is built by scripts/test.sh (build/core)")
+def test_python_maps_exactly_what_the_cli_maps(tmp_path, kitti_scans, kitti_classes):
+    subprocess.run([str(cli_binary()), "map", "--data", str(KITTI), "--classes",
+                    str(REPO / "config" / "classes_semantickitti.yaml"), "--out", str(tmp_path),
+                    "--scans", "2", "--no-render", "-q"], check=True, capture_output=True)
+    cli_map = eo.load(tmp_path / "map.ot")
+    tree = mapped(kitti_scans, kitti_classes, 2)
+    points = kitti_scans[0][0].points_world()
+    a, b = tree.query(points), cli_map.query(points)
+    np.testing.assert_array_equal(a.belief, b.belief)
+    np.testing.assert_array_equal(a.occupied, b.occupied)
+    assert tree.num_leaves == cli_map.num_leaves
+
+
+def test_insert_scan_releases_the_gil(kitti_scans, kitti_classes):
+    """While one thread inserts a real scan, the main thread keeps running Python."""
+    scan, evidence = kitti_scans[0]
+    points = scan.points_world()
+    tree = eo.EvidentialOcTree(0.2, kitti_classes)
+    span = {}
+
+    def insert():
+        span["start"] = time.monotonic()
+        tree.insert_scan(points, evidence, origin=scan.origin)
+        span["end"] = time.monotonic()
+
+    worker = threading.Thread(target=insert)
+    ticks = []
+    worker.start()
+    while worker.is_alive():
+        ticks.append(time.monotonic())
+    worker.join()
+    during = [t for t in ticks if span["start"] < t < span["end"]]
+    assert len(during) > 100  # with the GIL held the main thread could not run at all
