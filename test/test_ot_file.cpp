@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -382,6 +383,67 @@ TEST(Merge, WithItselfDoublesTheEvidence) {
     return;
   }
   EXPECT_TRUE(compareTrees(self, expected));
+}
+
+// Scans from three origins: later scans' kernels reach voxels only earlier scans observed.
+std::vector<test::SyntheticScan> walkingScans() {
+  const test::SyntheticScene scene;
+  return {scene.scan(octomap::point3d(0.05f, 0.1f, 1.7f), 1),
+          scene.scan(octomap::point3d(1.05f, 0.9f, 1.7f), 2),
+          scene.scan(octomap::point3d(2.05f, -0.7f, 1.7f), 3)};
+}
+
+// Largest |belief difference| of `b` from `a` over a's leaves; labels must agree.
+float maxBeliefDifference(const EvidentialOcTree& a, const EvidentialOcTree& b, int* label_diffs) {
+  float worst = 0.0f;
+  *label_diffs = 0;
+  for (auto it = a.begin_leafs(); it != a.end_leafs(); ++it) {
+    const VoxelOpinion x = a.opinion(&*it), y = b.query(it.getKey());
+    *label_diffs += x.label != y.label;
+    for (size_t c = 0; c < x.belief.size(); ++c) {
+      worst = std::max(worst, std::fabs(x.belief[c] - y.belief[c]));
+    }
+  }
+  return worst;
+}
+
+TEST(Merge, InOrderWithUnobservedEvidenceEqualsTheSequentialMap) {
+  const auto scans = walkingScans();
+  EvidentialOcTree sequential(0.2, 3);
+  for (const auto& s : scans) sequential.insertSemanticScan(s.points_W, s.evidence, s.origin_W);
+  // Chunk A = scan 0, chunk B = scans 1-2, each with the evidence it could not place.
+  EvidentialOcTree a(0.2, 3), a_unobserved(0.2, 3), b(0.2, 3), b_unobserved(0.2, 3);
+  a.insertSemanticScan(scans[0].points_W, scans[0].evidence, scans[0].origin_W, &a_unobserved);
+  for (size_t i = 1; i < 3; ++i) {
+    b.insertSemanticScan(scans[i].points_W, scans[i].evidence, scans[i].origin_W, &b_unobserved);
+  }
+  EXPECT_GT(b_unobserved.numSemanticNodes(), 0u);
+  int label_diffs = 0;
+  EvidentialOcTree plain(a);
+  plain.merge(b);  // without the unobserved evidence: B's evidence for A's voxels is lost
+  EXPECT_GT(maxBeliefDifference(sequential, plain, &label_diffs), 1e-3f);
+
+  EvidentialOcTree rest(0.2, 3);
+  a.addEvidence(b_unobserved, &rest);
+  a.merge(b);
+  a_unobserved.merge(rest);
+  EXPECT_LT(maxBeliefDifference(sequential, a, &label_diffs), 1e-5f);
+  EXPECT_EQ(label_diffs, 0);
+  EXPECT_EQ(a.getNumLeafNodes(), sequential.getNumLeafNodes());
+  EXPECT_EQ(a.numSemanticNodes(), sequential.numSemanticNodes());
+}
+
+TEST(Merge, UnobservedEvidenceIsEmptyWhenTheKernelCreatesLeaves) {
+  SemanticConfig config;
+  config.kernel_creates_leaves = true;
+  EvidentialOcTree map(0.2, 3, config), unobserved(0.2, 3, config);
+  const auto s = walkingScans()[1];
+  map.insertSemanticScan(s.points_W, s.evidence, s.origin_W, &unobserved);
+  EXPECT_EQ(unobserved.numSemanticNodes(), 0u);
+  EvidentialOcTree wrong_c(0.2, 4);
+  EXPECT_THROW(map.insertSemanticScan(s.points_W, s.evidence, s.origin_W, &wrong_c),
+               std::invalid_argument);
+  EXPECT_THROW(map.addEvidence(wrong_c, nullptr), std::invalid_argument);
 }
 
 TEST(Merge, MismatchedMapsThrowAndChangeNothing) {

@@ -90,9 +90,14 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // adaptive sparse kernel. points_W are in the world (tree) frame; evidence is N x C,
   // row-major, one evidence vector per point (each value finite and >= 0).
   // Throws std::invalid_argument (and leaves the map unchanged) when evidence is malformed.
+  // With `unobserved` (a map of equal resolution, C and rule), the evidence this map drops
+  // because its voxel has not been observed yet (kernel updates outside known space,
+  // kernel_creates_leaves off) is added there instead: what a later chunk of a sequence hands
+  // to the chunks before it for an exact merge (addEvidence).
   InsertStats insertSemanticScan(const octomap::Pointcloud& points_W,
                                  const std::vector<float>& evidence,
-                                 const octomap::point3d& origin_W);
+                                 const octomap::point3d& origin_W,
+                                 EvidentialOcTree* unobserved = nullptr);
   // Same, with points in the sensor frame and the sensor pose T_W_S.
   InsertStats insertSemanticScan(const octomap::Pointcloud& points_S,
                                  const std::vector<float>& evidence,
@@ -126,6 +131,12 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // Fuses another map of the same resolution, C and rule into this one. Occupancy log-odds add
   // (clamped) and payloads add, so a.merge(b) and b.merge(a) give equal maps.
   void merge(const EvidentialOcTree& other);
+  // Adds the semantic evidence of `evidence` (a map of equal resolution, C and rule; occupancy
+  // ignored) to the voxels this map has observed; the evidence of voxels it has not observed
+  // goes to `rest` when given (else it is dropped, as the integrator drops it). With chunk maps
+  // of a sequence built with `unobserved` maps, earlier.addEvidence(later_unobserved, &rest)
+  // before earlier.merge(later) gives exactly the sequentially built map.
+  void addEvidence(const EvidentialOcTree& evidence, EvidentialOcTree* rest);
   // Rebuilds the payload pool from the nodes that are still in the tree (after deleteNode).
   void compactPayloads();
 
@@ -149,6 +160,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   const float* slot(uint32_t index) const {
     return payloads_.data() + size_t(index) * num_classes_;
   }
+  void checkCompatible(const EvidentialOcTree& other, const char* what) const;
+  // into += from - prior per class, saturating at FLT_MAX (crafted files may hold huge values).
+  void addPayload(float* into, const float* from) const;
   void copySubtree(const EvidentialOcTree& from, const EvidentialOcTreeNode* src,
                    EvidentialOcTreeNode* dst);
   void updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth);

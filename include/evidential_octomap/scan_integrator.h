@@ -20,9 +20,13 @@ class ScanIntegrator {
   // evidence: N x C row-major evidence, C = tree->numClasses().
   // origin_W: sensor origin in the world frame, where every ray starts.
   // tree:     the map to update; the fusion rule is the tree's own.
+  // unobserved: optional; receives the evidence the kernel spreads to voxels `tree` has not
+  //           observed (which `tree` drops unless kernel_creates_leaves), see
+  //           EvidentialOcTree::addEvidence.
   // Throws std::invalid_argument before touching the map when evidence is malformed.
   InsertStats integrate(const octomap::Pointcloud& points_W, const std::vector<float>& evidence,
-                        const octomap::point3d& origin_W, EvidentialOcTree* tree) const;
+                        const octomap::point3d& origin_W, EvidentialOcTree* tree,
+                        EvidentialOcTree* unobserved = nullptr) const;
 
  private:
   SemanticConfig config_;

@@ -47,7 +47,8 @@ void checkRows(const MatrixIn& evidence, size_t points, int num_classes) {
 }
 
 InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const MatrixIn& evidence,
-                       std::optional<std::array<double, 3>> origin, std::optional<PoseIn> pose) {
+                       std::optional<std::array<double, 3>> origin, std::optional<PoseIn> pose,
+                       EvidentialOcTree* unobserved) {
   if (origin.has_value() == pose.has_value()) {
     throw std::invalid_argument(
         "give exactly one of origin (points in the map frame) or pose "
@@ -59,10 +60,11 @@ InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const Mat
   if (pose) {
     const auto T = pose->view();
     return tree.insertSemanticScan(toPointcloud(points, *pose), values,
-                                   octomap::point3d(T(0, 3), T(1, 3), T(2, 3)));
+                                   octomap::point3d(T(0, 3), T(1, 3), T(2, 3)), unobserved);
   }
   const std::array<double, 3>& o = *origin;
-  return tree.insertSemanticScan(toPointcloud(points), values, octomap::point3d(o[0], o[1], o[2]));
+  return tree.insertSemanticScan(toPointcloud(points), values, octomap::point3d(o[0], o[1], o[2]),
+                                 unobserved);
 }
 
 QueryResult query(const EvidentialOcTree& tree, const PointsIn& points) {
@@ -274,9 +276,13 @@ void bindTree(nb::module_& m) {
       // --- integration and queries
       .def("insert_scan", &insertScan, nb::arg("points"), nb::arg("evidence"), nb::kw_only(),
            nb::arg("origin") = nb::none(), nb::arg("pose") = nb::none(),
+           nb::arg("unobserved") = nb::none(),
            "Inserts one scan: points (N, 3) and evidence (N, C) >= 0. With origin (3,), points "
            "are in the map frame; with pose (4, 4) sensor-to-map, in the sensor frame. Raises "
-           "ValueError, leaving the map unchanged, for malformed evidence.")
+           "ValueError, leaving the map unchanged, for malformed evidence. With unobserved (a map "
+           "of "
+           "equal resolution, C and rule), the evidence this map drops for voxels it has not "
+           "observed yet is added there (for exact in-order merges, see add_evidence).")
       .def("query", &query, nb::arg("points"), "Opinion and occupancy of each point's voxel.")
       .def("leaves", &leaves, nb::arg("occupied_only") = false, "Every leaf as arrays.")
       // --- files and maps
@@ -301,6 +307,17 @@ void bindTree(nb::module_& m) {
           nb::arg("other"),
           "Fuses a map of equal resolution, C and rule into this one (Dempster's rule in "
           "evidence space; occupancy log-odds add, clamped).")
+      .def(
+          "add_evidence",
+          [](Tree& t, const Tree& evidence, Tree* rest) {
+            nb::gil_scoped_release release;
+            t.addEvidence(evidence, rest);
+          },
+          nb::arg("evidence"), nb::arg("rest") = nb::none(),
+          "Adds the semantic evidence of `evidence` to the voxels this map has observed; that of "
+          "other voxels goes to `rest` (or is dropped). For chunk maps of a sequence: "
+          "earlier.add_evidence(later_unobserved, rest) then earlier.merge(later) equals the "
+          "sequential map.")
       .def(
           "to_color_octree",
           [](const Tree& t, const ClassTable& classes, const std::string& mode) {

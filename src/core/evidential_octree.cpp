@@ -134,8 +134,10 @@ void EvidentialOcTree::setConfig(const SemanticConfig& config) {
 
 InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& points_W,
                                                  const std::vector<float>& evidence,
-                                                 const octomap::point3d& origin_W) {
-  return ScanIntegrator(config_).integrate(points_W, evidence, origin_W, this);
+                                                 const octomap::point3d& origin_W,
+                                                 EvidentialOcTree* unobserved) {
+  if (unobserved) checkCompatible(*unobserved, "unobserved evidence");
+  return ScanIntegrator(config_).integrate(points_W, evidence, origin_W, this, unobserved);
 }
 
 InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& points_S,
@@ -418,11 +420,51 @@ namespace {
 float clampLogOdds(float value, float lo, float hi) { return std::min(std::max(value, lo), hi); }
 }  // namespace
 
-void EvidentialOcTree::merge(const EvidentialOcTree& other) {
+void EvidentialOcTree::checkCompatible(const EvidentialOcTree& other, const char* what) const {
   if (other.resolution != resolution || other.num_classes_ != num_classes_ ||
       other.config_.rule != config_.rule || other.config_.sbki_prior != config_.sbki_prior) {
-    throw std::invalid_argument("merge needs maps of equal resolution, class count and rule");
+    throw std::invalid_argument(std::string(what) +
+                                " needs maps of equal resolution, class count and rule");
   }
+}
+
+void EvidentialOcTree::addPayload(float* into, const float* from) const {
+  const float prior = rule_->prior();
+  for (int c = 0; c < num_classes_; ++c) {
+    into[c] = static_cast<float>(
+        std::min(double(into[c]) + from[c] - prior, double(std::numeric_limits<float>::max())));
+  }
+}
+
+void EvidentialOcTree::addEvidence(const EvidentialOcTree& evidence, EvidentialOcTree* rest) {
+  checkCompatible(evidence, "addEvidence");
+  if (rest) checkCompatible(*rest, "addEvidence");
+  for (auto it = evidence.begin_leafs(); it != evidence.end_leafs(); ++it) {
+    const float* from = evidence.payload(&*it);
+    if (!from) continue;
+    // A pruned block of the source stands for each of its voxels.
+    const unsigned level = tree_depth - it.getDepth();
+    const octomap::key_type mask = static_cast<octomap::key_type>(~((1u << level) - 1u));
+    const octomap::OcTreeKey base(it.getKey()[0] & mask, it.getKey()[1] & mask,
+                                  it.getKey()[2] & mask);
+    const unsigned span = 1u << level;
+    for (unsigned dx = 0; dx < span; ++dx)
+      for (unsigned dy = 0; dy < span; ++dy)
+        for (unsigned dz = 0; dz < span; ++dz) {
+          const octomap::OcTreeKey key(base[0] + dx, base[1] + dy, base[2] + dz);
+          if (search(key)) {
+            addPayload(payloadForUpdate(leafForUpdate(key, false)), from);
+          } else if (rest) {
+            rest->addPayload(rest->payloadForUpdate(rest->leafForUpdate(key, true)), from);
+          }
+        }
+  }
+  updateInnerNodes();
+  if (rest) rest->updateInnerNodes();
+}
+
+void EvidentialOcTree::merge(const EvidentialOcTree& other) {
+  checkCompatible(other, "merge");
   if (!other.root) return;
   if (!root) {
     root = new EvidentialOcTreeNode();
@@ -431,18 +473,10 @@ void EvidentialOcTree::merge(const EvidentialOcTree& other) {
     return;
   }
   // Leaf-level fusion: log-odds add (clamped), payload increments add. Both are commutative.
-  const float prior = rule_->prior();
   auto fuseLeaf = [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src) {
     dst->setLogOdds(clampLogOdds(dst->getLogOdds() + src->getLogOdds(), clamping_thres_min,
                                  clamping_thres_max));
-    if (!src->hasSemantics()) return;
-    float* into = payloadForUpdate(dst);
-    const float* from = other.slot(src->payload_);
-    // Saturating: payloads near FLT_MAX (only a crafted file holds them) must not become inf.
-    for (int c = 0; c < num_classes_; ++c) {
-      into[c] = static_cast<float>(std::min(double(into[c]) + from[c] - prior,
-                                            double(std::numeric_limits<float>::max())));
-    }
+    if (src->hasSemantics()) addPayload(payloadForUpdate(dst), other.slot(src->payload_));
   };
   // Applies src (a leaf) to every leaf below dst; children dst lacks become copies of src.
   std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*, unsigned)> spread =

@@ -273,8 +273,8 @@ void validateInput(const octomap::Pointcloud& points_W, const std::vector<float>
 
 InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
                                       const std::vector<float>& evidence,
-                                      const octomap::point3d& origin_W,
-                                      EvidentialOcTree* tree) const {
+                                      const octomap::point3d& origin_W, EvidentialOcTree* tree,
+                                      EvidentialOcTree* unobserved) const {
   const int num_classes = tree->numClasses();
   const size_t n = points_W.size();
   InsertStats stats;
@@ -345,6 +345,15 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   for (const auto& [voxel, index] : total.rows) updates.push_back({voxel, 0, index});
   stats.voxels_updated =
       tree->applyUpdates(std::move(updates), total.increments, config_.kernel_creates_leaves);
+  if (unobserved && !config_.kernel_creates_leaves) {
+    // Leaves are never removed, so a voxel without one now had none before and got none from
+    // this scan's rays: the map dropped its evidence, which `unobserved` keeps.
+    std::vector<VoxelUpdate> dropped;
+    for (const auto& [voxel, index] : total.rows) {
+      if (!tree->search(voxel)) dropped.push_back({voxel, 0, index});
+    }
+    unobserved->applyUpdates(std::move(dropped), total.increments, true);
+  }
   stats.ms_update = msSince(start);
   return stats;
 }
