@@ -1,20 +1,28 @@
-// Map and input-prediction metrics of DESIGN §6, defined so anyone can recompute them:
-//   queries   = GT-labelled points (ignore class excluded) of the evaluated scans, world frame;
-//   covered   = the query's voxel is occupied (tree.isNodeOccupied(tree.search(p)));
-//   O.Acc     = covered / queries;
-//   IoU^c     = TP / (TP + FP + FN) over covered queries, mIoU over the classes present in GT;
-//   Acc       = correct / covered;
-//   BS        = mean over covered queries of (u_bar - 1[s != gt])^2, u_bar the voxel uncertainty,
-//               min-max scaled over the map's semantic leaves when the rule's uncertainty is not
-//               already a mass in [0, 1] (UncertaintyScale says which was done).
-// An occupied voxel without semantic evidence has s = "no label" (wrong) and u_bar = 1.
+// Map and input metrics of DESIGN §6, one set for every row (the input and each rule), computed
+// on the same queries and defined so anyone can recompute them:
+//   queries     GT-labelled points (ignore class excluded) of the evaluated scans, world frame;
+//   answer      what a row says at a query: the map's voxel opinion (the voxel holds semantic
+//               evidence) or, for the input row, the point's own opinion; "no label" otherwise;
+//   occupancy coverage  share of queries whose voxel is occupied (OctoMap's isNodeOccupied);
+//   semantic coverage   share of queries whose voxel holds evidence (the paper's O.Acc);
+//   mIoU, Acc   over ALL queries (no label = wrong) and over labelled queries; mIoU averages
+//               IoU = TP / (TP + FP + FN) over the classes present in GT;
+//   Brier       mean over all queries of sum_c (p^c - 1[c = gt])^2 of the projected class
+//               probabilities (dempster b + u/C, sbki/ebs alpha/S, no label: uniform 1/C);
+//   NLL         mean of -ln max(p^gt, 1e-6);
+//   ECE         sum over 10 equal-width bins of max_c p^c of (n_bin / N) |acc_bin - conf_bin|
+//               (a query without label has confidence 1/C and is wrong);
+//   error detection, among labelled queries, for each uncertainty output (kUncertaintyOutputs):
+//               AUROC of the output as a score for "the label is wrong" (ties count 1/2), and
+//               AURC, the mean over k = 1..n of the error rate of the k most certain answers
+//               (ties ordered at random, in expectation).
 #pragma once
+
+#include <octomap/octomap_types.h>
 
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <octomap/octomap_types.h>
 
 #include "evidential_octomap/evidential_octree.h"
 
@@ -57,47 +65,110 @@ class ConfusionMatrix {
   uint64_t total_ = 0;
 };
 
-// How voxel uncertainty becomes u_bar in [0, 1] for the Brier score.
-struct UncertaintyScale {
-  bool scaled = false;  // false: the rule's uncertainty is a mass, used as is
-  double min = 0.0;     // over the map's semantic leaves (when scaled)
-  double max = 1.0;
-  double apply(double u) const;  // clamped to [0, 1]
-  std::string describe() const;
+// Per-voxel uncertainty outputs, each evaluated for error detection:
+//   u           the rule's uncertainty (dempster: vacuity mass; sbki/ebs: Dirichlet variance)
+//   conflict    VoxelOpinion::conflict
+//   1-max_p     one minus the largest projected probability
+//   dissonance  subjective logic's dissonance of the belief masses (Josang 2018, 4.4.3)
+inline const std::vector<std::string> kUncertaintyOutputs{"u", "conflict", "1-max_p", "dissonance"};
+
+// What a row says at one query.
+struct Answer {
+  int label = -1;                  // -1: no label
+  std::vector<float> probability;  // C projected probabilities; empty: uniform
+  std::vector<float> uncertainty;  // kUncertaintyOutputs, when labelled
 };
 
-// Identity for rules whose uncertainty is a mass, else min-max over every semantic leaf.
-UncertaintyScale uncertaintyScale(const EvidentialOcTree& tree);
+// The answer of a voxel opinion read with `rule` (label -1: no label).
+Answer answerOf(const VoxelOpinion& opinion, const FusionRule& rule);
+// The answer of one point's evidence: its own subjective opinion (b = e/S, u = C/S, p = alpha/S),
+// read exactly as a dempster voxel that fused only this point at k = 1.
+Answer answerOfEvidence(const float* evidence, int num_classes);
+// Dissonance of belief masses: sum_k b_k [sum_{j!=k} b_j Bal(b_j, b_k)] / [sum_{j!=k} b_j],
+// Bal(a, b) = 1 - |a - b| / (a + b) (0 when both are 0).
+double dissonance(const std::vector<float>& belief);
+
+// AUROC of `score` for `positive` (ties count 1/2); NaN without both kinds.
+double auroc(const std::vector<float>& score, const std::vector<uint8_t>& positive);
+// Area under the risk-coverage curve: answers sorted by ascending score, risk(k) = errors
+// among the first k / k, averaged over k = 1..n; tied scores are taken in random order, in
+// expectation. NaN when empty.
+double aurc(const std::vector<float>& score, const std::vector<uint8_t>& wrong);
+
+struct ReliabilityBin {  // one bin of max_c p^c
+  double lower = 0.0, upper = 0.0;
+  size_t count = 0;
+  double mean_confidence = 0.0, accuracy = 0.0;
+};
+
+struct ErrorDetection {  // one uncertainty output among labelled queries
+  std::string output;
+  double auroc = 0.0, aurc = 0.0;
+  // Error rate per tenth of the labelled queries sorted by ascending output (the curve).
+  std::vector<double> error_rate_by_decile;
+  std::vector<double> mean_output_by_decile;
+};
+
+struct QualityMetrics {
+  size_t queries = 0, labelled = 0;
+  ConfusionMatrix all;  // every query; no label = the no-label column
+  ConfusionMatrix labelled_only;
+  double miou_all = 0.0, acc_all = 0.0;
+  double miou_labelled = 0.0, acc_labelled = 0.0;
+  double brier = 0.0, nll = 0.0, ece = 0.0;  // over all queries
+  double error_rate_labelled = 0.0;          // AURC of a random order, for reference
+  std::vector<ReliabilityBin> reliability;
+  std::vector<ErrorDetection> error_detection;  // kUncertaintyOutputs order
+  const ErrorDetection* detection(const std::string& output) const;
+};
+
+// Collects answers query by query; finish() computes every metric above.
+class QualityAccumulator {
+ public:
+  QualityAccumulator(int num_classes, int ignore_class);
+  // Queries whose gt is the ignore class or outside [0, C) are skipped (not counted).
+  void add(int gt, const Answer& answer);
+  QualityMetrics finish() const;
+
+ private:
+  static constexpr int kBins = 10;
+  int num_classes_, ignore_class_;
+  QualityMetrics m_;
+  double brier_sum_ = 0.0, nll_sum_ = 0.0;
+  std::vector<ReliabilityBin> bins_;
+  std::vector<uint8_t> wrong_;                   // per labelled query
+  std::vector<std::vector<float>> uncertainty_;  // per output, per labelled query
+};
 
 struct MapMetrics {
-  size_t queries = 0;
-  size_t covered = 0;
-  double occupied_accuracy = 0.0;  // O.Acc
-  ConfusionMatrix confusion;       // covered queries only (the paper's mIoU / Acc)
-  ConfusionMatrix confusion_all;   // every query; uncovered ones count as "no label"
-  double miou = 0.0;               // over covered queries
-  double accuracy = 0.0;           // over covered queries
-  double miou_all = 0.0;           // every query, uncovered = wrong (BENCHMARKS.md convention)
-  double accuracy_all = 0.0;
-  double brier = 0.0;              // over covered queries
-  UncertaintyScale scale;
-  double mean_u_correct = 0.0;     // mean u_bar of covered correct / wrong queries
-  double mean_u_wrong = 0.0;
+  QualityMetrics quality;
+  size_t occupied = 0;              // queries whose voxel is occupied
+  double occupancy_coverage = 0.0;  // occupied / queries
+  double semantic_coverage = 0.0;   // labelled / queries (paper O.Acc)
 };
 
-// Queries whose gt is `ignore_class` or outside [0, C) are skipped (not counted).
 MapMetrics evaluateMap(const EvidentialOcTree& tree, const std::vector<Query>& queries,
                        int ignore_class);
 
-// The input predictions' per-point metrics on the same queries (every query is "covered").
-struct PredictionMetrics {
-  size_t queries = 0;
-  ConfusionMatrix confusion;
-  double miou = 0.0;
-  double accuracy = 0.0;
-};
+// The input's per-point metrics on the same queries: `evidence` holds C values per query
+// (same order), or is empty for hard predictions only (then p is one-hot on Query::predicted
+// and every uncertainty output is 0).
+QualityMetrics evaluateInput(const std::vector<Query>& queries, const std::vector<float>& evidence,
+                             int num_classes, int ignore_class);
 
-PredictionMetrics evaluatePredictions(const std::vector<Query>& queries, int num_classes,
-                                      int ignore_class);
+// Occupied voxels (leaves at full depth; pruned leaves count every voxel they cover) that hold
+// no ray end point of `endpoints`: what densification or a kernel adds as occupied.
+size_t occupiedWithoutEndpoint(const EvidentialOcTree& tree,
+                               const std::vector<octomap::OcTreeKey>& endpoints);
+
+// Display range of VoxelOpinion::uncertainty for renders: identity for rules whose uncertainty
+// is a mass, else min-max over the map's semantic leaves.
+struct UncertaintyScale {
+  bool scaled = false;
+  double min = 0.0, max = 1.0;
+  double apply(double u) const;  // clamped to [0, 1]
+  std::string describe() const;
+};
+UncertaintyScale uncertaintyScale(const EvidentialOcTree& tree);
 
 }  // namespace evidential_octomap

@@ -1,15 +1,18 @@
+// Metric definitions (metrics.h): confusion matrix, error-detection rankings, and the
+// accumulator that turns per-query answers into the metric set.
 #include "evidential_octomap/metrics.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
+#include <numeric>
 #include <stdexcept>
 
 namespace evidential_octomap {
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kMinProbability = 1e-6;  // NLL clip
 }  // namespace
 
 // --- ConfusionMatrix ----------------------------------------------------------------------
@@ -87,106 +90,155 @@ double ConfusionMatrix::accuracy() const {
   return total_ == 0 ? kNaN : double(correct()) / double(total_);
 }
 
-// --- uncertainty scaling ------------------------------------------------------------------
+// --- error-detection rankings --------------------------------------------------------------
 
-double UncertaintyScale::apply(double u) const {
-  double t = u;
-  if (scaled) t = max > min ? (u - min) / (max - min) : 0.0;
-  return std::min(1.0, std::max(0.0, t));
+namespace {
+// Indices sorted by ascending score, and the [begin, end) runs of equal scores.
+std::vector<uint32_t> sortedOrder(const std::vector<float>& score) {
+  std::vector<uint32_t> order(score.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(),
+            [&](uint32_t a, uint32_t b) { return score[a] < score[b]; });
+  return order;
 }
+}  // namespace
 
-std::string UncertaintyScale::describe() const {
-  if (!scaled) return "uncertainty is a mass in [0,1], used as is";
-  std::ostringstream s;
-  s << "min-max scaled over the map's semantic leaves (min " << min << ", max " << max << ")";
-  return s.str();
-}
-
-UncertaintyScale uncertaintyScale(const EvidentialOcTree& tree) {
-  UncertaintyScale scale;
-  if (tree.rule().uncertaintyIsMass()) return scale;
-  scale.scaled = true;
-  double lo = std::numeric_limits<double>::infinity();
-  double hi = -std::numeric_limits<double>::infinity();
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (!it->hasSemantics()) continue;
-    const double u = tree.opinion(&*it).uncertainty;
-    lo = std::min(lo, u);
-    hi = std::max(hi, u);
+double auroc(const std::vector<float>& score, const std::vector<uint8_t>& positive) {
+  const std::vector<uint32_t> order = sortedOrder(score);
+  // Mann-Whitney U: sum of the (tie-averaged) ranks of the positives.
+  double rank_sum = 0.0;
+  size_t positives = 0;
+  for (size_t i = 0; i < order.size();) {
+    size_t j = i;
+    size_t group_positives = 0;
+    while (j < order.size() && score[order[j]] == score[order[i]])
+      group_positives += positive[order[j++]];
+    rank_sum += double(group_positives) * (double(i + 1) + double(j)) / 2.0;
+    positives += group_positives;
+    i = j;
   }
-  if (lo > hi) {  // no semantic leaf at all
-    lo = 0.0;
-    hi = 1.0;
-  }
-  scale.min = lo;
-  scale.max = hi;
-  return scale;
+  const size_t negatives = order.size() - positives;
+  if (positives == 0 || negatives == 0) return kNaN;
+  const double u = rank_sum - double(positives) * double(positives + 1) / 2.0;
+  return u / (double(positives) * double(negatives));
 }
 
-// --- evaluation ---------------------------------------------------------------------------
-
-MapMetrics evaluateMap(const EvidentialOcTree& tree, const std::vector<Query>& queries,
-                       int ignore_class) {
-  const int C = tree.numClasses();
-  MapMetrics m;
-  m.confusion = ConfusionMatrix(C);
-  m.confusion_all = ConfusionMatrix(C);
-  m.scale = uncertaintyScale(tree);
-
-  double brier_sum = 0.0, u_correct = 0.0, u_wrong = 0.0;
-  size_t n_correct = 0, n_wrong = 0;
-  for (const Query& q : queries) {
-    if (q.gt < 0 || q.gt >= C || q.gt == ignore_class) continue;
-    ++m.queries;
-    const EvidentialOcTreeNode* node = tree.search(q.point_W);
-    if (node == nullptr || !tree.isNodeOccupied(node)) {
-      m.confusion_all.add(q.gt, -1);
-      continue;
+double aurc(const std::vector<float>& score, const std::vector<uint8_t>& wrong) {
+  const std::vector<uint32_t> order = sortedOrder(score);
+  if (order.empty()) return kNaN;
+  double sum = 0.0, errors_before = 0.0;
+  for (size_t i = 0; i < order.size();) {
+    size_t j = i;
+    double group_errors = 0.0;
+    while (j < order.size() && score[order[j]] == score[order[i]])
+      group_errors += wrong[order[j++]];
+    // In a random order of the tied group, t of its m answers hold t/m of its errors on average.
+    const double m = double(j - i);
+    for (size_t k = i; k < j; ++k) {
+      const double t = double(k - i + 1);
+      sum += (errors_before + group_errors * t / m) / double(k + 1);
     }
-    ++m.covered;
-    int label = -1;
-    double u_bar = 1.0;
-    if (node->hasSemantics()) {
-      const VoxelOpinion op = tree.opinion(node);
-      label = (op.label >= 0 && op.label < C) ? op.label : -1;
-      u_bar = label >= 0 ? m.scale.apply(op.uncertainty) : 1.0;
-    }
-    m.confusion.add(q.gt, label);
-    m.confusion_all.add(q.gt, label);
-    const bool wrong = label != q.gt;
-    const double d = u_bar - (wrong ? 1.0 : 0.0);
-    brier_sum += d * d;
-    if (wrong) {
-      u_wrong += u_bar;
-      ++n_wrong;
-    } else {
-      u_correct += u_bar;
-      ++n_correct;
-    }
+    errors_before += group_errors;
+    i = j;
   }
-  m.occupied_accuracy = m.queries ? double(m.covered) / double(m.queries) : kNaN;
-  m.miou = m.confusion.meanIou(ignore_class);
-  m.accuracy = m.confusion.accuracy();
-  m.miou_all = m.confusion_all.meanIou(ignore_class);
-  m.accuracy_all = m.confusion_all.accuracy();
-  m.brier = m.covered ? brier_sum / double(m.covered) : kNaN;
-  m.mean_u_correct = n_correct ? u_correct / double(n_correct) : kNaN;
-  m.mean_u_wrong = n_wrong ? u_wrong / double(n_wrong) : kNaN;
-  return m;
+  return sum / double(order.size());
 }
 
-PredictionMetrics evaluatePredictions(const std::vector<Query>& queries, int num_classes,
-                                      int ignore_class) {
-  PredictionMetrics m;
-  m.confusion = ConfusionMatrix(num_classes);
-  for (const Query& q : queries) {
-    if (q.gt < 0 || q.gt >= num_classes || q.gt == ignore_class) continue;
-    ++m.queries;
-    const int p = (q.predicted >= 0 && q.predicted < num_classes) ? q.predicted : -1;
-    m.confusion.add(q.gt, p);
+// --- QualityAccumulator -------------------------------------------------------------------
+
+const ErrorDetection* QualityMetrics::detection(const std::string& output) const {
+  for (const ErrorDetection& d : error_detection) {
+    if (d.output == output) return &d;
   }
-  m.miou = m.confusion.meanIou(ignore_class);
-  m.accuracy = m.confusion.accuracy();
+  return nullptr;
+}
+
+QualityAccumulator::QualityAccumulator(int num_classes, int ignore_class)
+    : num_classes_(num_classes),
+      ignore_class_(ignore_class),
+      bins_(kBins),
+      uncertainty_(kUncertaintyOutputs.size()) {
+  m_.all = ConfusionMatrix(num_classes);
+  m_.labelled_only = ConfusionMatrix(num_classes);
+  for (int b = 0; b < kBins; ++b) {
+    bins_[b].lower = double(b) / kBins;
+    bins_[b].upper = double(b + 1) / kBins;
+  }
+}
+
+void QualityAccumulator::add(int gt, const Answer& a) {
+  if (gt < 0 || gt >= num_classes_ || gt == ignore_class_) return;
+  ++m_.queries;
+  const int label = (a.label >= 0 && a.label < num_classes_) ? a.label : -1;
+  m_.all.add(gt, label);
+  // Projected probabilities (uniform without an answer): Brier, NLL, confidence.
+  const double uniform = 1.0 / num_classes_;
+  double brier = 0.0, confidence = uniform, p_gt = uniform;
+  if (label >= 0 && !a.probability.empty()) {
+    confidence = 0.0;
+    for (int c = 0; c < num_classes_; ++c) {
+      const double p = a.probability[c];
+      brier += (p - (c == gt)) * (p - (c == gt));
+      confidence = std::max(confidence, p);
+    }
+    p_gt = a.probability[gt];
+  } else {
+    brier = (1.0 - uniform) * (1.0 - uniform) + (num_classes_ - 1) * uniform * uniform;
+  }
+  brier_sum_ += brier;
+  nll_sum_ -= std::log(std::max(p_gt, kMinProbability));
+  const bool correct = label == gt;
+  ReliabilityBin& bin = bins_[std::min(kBins - 1, int(confidence * kBins))];
+  ++bin.count;
+  bin.mean_confidence += confidence;
+  bin.accuracy += correct;
+  if (label < 0) return;
+  ++m_.labelled;
+  m_.labelled_only.add(gt, label);
+  wrong_.push_back(!correct);
+  for (size_t o = 0; o < uncertainty_.size(); ++o) {
+    uncertainty_[o].push_back(o < a.uncertainty.size() ? a.uncertainty[o] : 0.0f);
+  }
+}
+
+QualityMetrics QualityAccumulator::finish() const {
+  QualityMetrics m = m_;
+  const double n = double(m.queries);
+  m.miou_all = m.all.meanIou(ignore_class_);
+  m.acc_all = m.all.accuracy();
+  m.miou_labelled = m.labelled_only.meanIou(ignore_class_);
+  m.acc_labelled = m.labelled_only.accuracy();
+  m.brier = m.queries ? brier_sum_ / n : kNaN;
+  m.nll = m.queries ? nll_sum_ / n : kNaN;
+  m.reliability = bins_;
+  m.ece = 0.0;
+  for (ReliabilityBin& b : m.reliability) {
+    if (b.count == 0) continue;
+    b.mean_confidence /= double(b.count);
+    b.accuracy /= double(b.count);
+    m.ece += double(b.count) / n * std::fabs(b.accuracy - b.mean_confidence);
+  }
+  if (!m.queries) m.ece = kNaN;
+  const size_t errors = std::accumulate(wrong_.begin(), wrong_.end(), size_t(0));
+  m.error_rate_labelled = m.labelled ? double(errors) / double(m.labelled) : kNaN;
+  for (size_t o = 0; o < kUncertaintyOutputs.size(); ++o) {
+    ErrorDetection d;
+    d.output = kUncertaintyOutputs[o];
+    d.auroc = auroc(uncertainty_[o], wrong_);
+    d.aurc = aurc(uncertainty_[o], wrong_);
+    const std::vector<uint32_t> order = sortedOrder(uncertainty_[o]);
+    for (int b = 0; b < kBins && !order.empty(); ++b) {
+      const size_t lo = order.size() * b / kBins, hi = order.size() * (b + 1) / kBins;
+      double e = 0.0, s = 0.0;
+      for (size_t i = lo; i < hi; ++i) {
+        e += wrong_[order[i]];
+        s += uncertainty_[o][order[i]];
+      }
+      d.error_rate_by_decile.push_back(hi > lo ? e / double(hi - lo) : kNaN);
+      d.mean_output_by_decile.push_back(hi > lo ? s / double(hi - lo) : kNaN);
+    }
+    m.error_detection.push_back(std::move(d));
+  }
   return m;
 }
 

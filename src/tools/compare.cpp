@@ -63,26 +63,6 @@ SemanticConfig variantConfig(const std::string& v, SemanticConfig c) {
   return c;
 }
 
-std::string num4(double v) {
-  if (!std::isfinite(v)) return "–";
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(4) << v;
-  return s.str();
-}
-
-// Classes present in GT whose map IoU is 0 although the input's is not: what the percentile
-// threshold (or the kernel) wiped out.
-std::string lostClasses(const RunReport& r, const ClassTable& classes) {
-  std::string out;
-  for (int c = 0; c < classes.numClasses(); ++c) {
-    if (c == classes.ignore_class || !r.map.confusion_all.presentInGt(c)) continue;
-    if (r.map.confusion.iou(c) == 0.0 && r.input.confusion.iou(c) > 0.0) {
-      out += (out.empty() ? "" : ", ") + classes.names[c];
-    }
-  }
-  return out.empty() ? "–" : out;
-}
-
 // Plans. default (the demo; about 10 min on 2 cores): every variant with onehot evidence (the
 // peers' setup in BENCHMARKS.md); dempster with and without threshold for knn-vote and confusion
 // (what each source does to the percentile threshold); held-out: dempster, sbki, ebs with onehot.
@@ -103,13 +83,40 @@ std::vector<std::string> plannedVariants(const CompareOptions& o, const std::str
 struct Section {
   std::string title;
   std::vector<std::string> notes;
-  std::vector<std::string> rows;
+  std::vector<std::string> rows;            // accuracy and calibration
+  std::vector<std::string> detection_rows;  // error detection
 };
 
-const char* kHeader =
-    "| evidence | method | Adap. | Thr. | mIoU % | Acc % | O.Acc % | BS | ms/scan | dropped % | "
-    "classes lost (map IoU 0, input > 0) |\n"
-    "|---|---|---|---|---|---|---|---|---|---|---|\n";
+const char* kLead = " evidence | method | Adap. | Thr. |";
+const char* kTail = " ms/scan | dropped % | classes lost (map IoU 0, input > 0) |";
+
+std::string tableHeader() {
+  std::string h = qualityHeader(kLead);
+  const size_t eol = h.find('\n');
+  return h.substr(0, eol) + kTail + "\n" + h.substr(eol + 1, h.size() - eol - 2) + "---|---|---|\n";
+}
+
+// Classes present in GT whose map IoU is 0 although the input's is not: what the percentile
+// threshold (or the kernel) wiped out.
+std::string lostClasses(const RunReport& r, const ClassTable& classes) {
+  std::string out;
+  const QualityMetrics& q = r.map.quality;
+  for (int c = 0; c < classes.numClasses(); ++c) {
+    if (c == classes.ignore_class || !q.all.presentInGt(c)) continue;
+    if (q.all.iou(c) == 0.0 && r.input.all.iou(c) > 0.0) {
+      out += (out.empty() ? "" : ", ") + classes.names[c];
+    }
+  }
+  return out.empty() ? "–" : out;
+}
+
+std::string ablationMarks(const SemanticConfig& config) {
+  const bool dst = config.rule == "dempster";
+  const bool thr = dst || config.rule == "ebs";
+  const bool adaptive = thr && config.effectiveGamma() != 0.0;
+  return std::string(" ") + (thr ? (adaptive ? "✓" : "") : "–") + " | " +
+         (thr ? (config.uncertainty_threshold ? "✓" : "") : "–") + " |";
+}
 
 // Runs every variant and evidence source on one dataset/protocol; appends rows and JSON.
 void runSection(const CompareOptions& o, const std::string& dataset_label,
@@ -120,8 +127,6 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
   const Protocol protocol = makeProtocol(protocol_name, scans.size());
   const std::vector<Query> queries = buildQueries(scans, protocol.query_scans,
                                                   classes.ignore_class);
-  const PredictionMetrics input =
-      evaluatePredictions(queries, classes.numClasses(), classes.ignore_class);
   Section sec;
   std::ostringstream title;
   title << dataset_label << ", protocol **" << protocol.name << "**: map scans "
@@ -131,8 +136,10 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
         << " GT-labelled points, class " << classes.names[classes.ignore_class] << " excluded)";
   sec.title = title.str();
   if (!predictions_note.empty()) sec.notes.push_back("Predictions: " + predictions_note + ".");
-  sec.rows.push_back("| – | input predictions, per point | | | " + percent(input.miou) + " | " +
-                     percent(input.accuracy) + " | – | – | – | – | – |");
+  const QualityMetrics hard =
+      evaluateInput(queries, {}, classes.numClasses(), classes.ignore_class);
+  sec.rows.push_back("| – | input predictions (hard labels), per point | | |" +
+                     qualityCells(hard, NAN, NAN) + " – | – | – |");
 
   for (const std::string& source_name : sources) {
     const std::vector<std::string> variants = plannedVariants(o, protocol.name, source_name);
@@ -141,12 +148,22 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
     ev.source = evidenceSourceFromName(source_name);
     std::vector<std::vector<float>> evidence;
     try {
-      evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes);
+      evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
     } catch (const std::exception& e) {
       sec.notes.push_back("Evidence source " + source_name + " skipped: " + e.what() + ".");
       continue;
     }
     sec.notes.push_back("Evidence `" + source_name + "`: " + describeEvidence(ev) + ".");
+    std::vector<float> query_evidence;
+    buildQueries(scans, protocol.query_scans, classes.ignore_class, &evidence, &query_evidence);
+    const QualityMetrics input =
+        evaluateInput(queries, query_evidence, classes.numClasses(), classes.ignore_class);
+    sec.rows.push_back("| " + source_name + " | " + inputDescription(ev) + " | | |" +
+                       qualityCells(input, NAN, NAN) + " – | – | – |");
+    sec.detection_rows.push_back("| " + source_name + " | " + inputDescription(ev) + " | | |" +
+                                 detectionCells(input));
+    const std::vector<octomap::OcTreeKey> endpoints =
+        endpointKeys(scans, protocol.map_scans, o.resolution);
     for (const std::string& v : variants) {
       const SemanticConfig config = variantConfig(v, o.base);
       MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, config, o.resolution,
@@ -165,24 +182,25 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
       r.resolution = o.resolution;
       r.map = evaluateMap(*run.tree, queries, classes.ignore_class);
       r.input = input;
+      r.input_description = inputDescription(ev);
+      r.occupied_without_endpoint =
+          static_cast<long long>(occupiedWithoutEndpoint(*run.tree, endpoints));
       r.ms_per_scan = run.ms_per_scan;
       r.totals = run.total;
       fillTreeStats(*run.tree, &r);
-      const bool dst = config.rule == "dempster";
-      const double dropped = r.totals.semantic_points
+      const double dropped = r.totals.points_in
                                  ? double(r.totals.points_dropped_uncertain) /
-                                       double(r.totals.semantic_points)
+                                       double(r.totals.points_in - r.totals.points_skipped -
+                                              r.totals.points_beyond_range)
                                  : 0.0;
+      const std::string lead = "| " + source_name + " | " + v + " |" + ablationMarks(config);
       std::ostringstream row;
-      row << "| " << source_name << " | " << v << " | "
-          << (dst ? (config.adaptive_length ? "✓" : "") : "–") << " | "
-          << (dst || config.rule == "ebs" ? (config.uncertainty_threshold ? "✓" : "") : "–")
-          << " | " << percent(r.map.miou) << " | " << percent(r.map.accuracy) << " | "
-          << percent(r.map.occupied_accuracy) << " | " << num4(r.map.brier)
-          << (r.map.scale.scaled ? "*" : "") << " | " << std::fixed << std::setprecision(0)
-          << median(r.ms_per_scan) << " | " << percent(dropped) << " | "
+      row << lead
+          << qualityCells(r.map.quality, r.map.semantic_coverage, r.map.occupancy_coverage) << " "
+          << fixed(median(r.ms_per_scan), 0) << " | " << percent(dropped) << " | "
           << lostClasses(r, classes) << " |";
       sec.rows.push_back(row.str());
+      sec.detection_rows.push_back(lead + detectionCells(r.map.quality));
       nlohmann::json j = toJson(r, classes);
       j["dataset_label"] = dataset_label;
       j["variant_id"] = v;
@@ -246,13 +264,16 @@ void runCompare(const CompareOptions& o) {
 
   std::ostringstream md;
   md << "# compare: fusion rules and the Table II ablation on the same queries\n\n"
-     << "Metrics (DESIGN §6): mIoU over classes present in GT and Acc over covered queries "
-        "(query = GT-labelled point; covered = its voxel is occupied); O.Acc = covered / all "
-        "queries; BS = mean over covered queries of (u - 1[wrong])^2, u the voxel uncertainty "
-        "(dempster: the mass u in [0,1]; * = sbki/ebs Dirichlet variance min-max scaled over "
-        "the map). ms/scan = median insertSemanticScan wall time (loading and evidence "
-        "derivation excluded). dropped % = semantic points above the per-scan percentile "
-        "threshold. Resolution "
+     << "Metrics (include/evidential_octomap/metrics.h), the same queries (GT-labelled points) "
+        "for every row: mIoU / Acc over **all** queries (a query whose voxel holds no evidence "
+        "counts as wrong) and over labelled ones; sem. cov. = share of queries whose voxel holds "
+        "evidence (the paper's O.Acc); occ. cov. = share whose voxel is occupied; Brier = mean "
+        "multi-class Brier score of the projected class probabilities (dempster b + u/C, "
+        "sbki/ebs alpha/S, no label: uniform), NLL (p clipped at 1e-6), ECE (10 bins); error "
+        "detection: AUROC and AURC of each uncertainty output for \"the label is wrong\" among "
+        "labelled queries. Input rows: each point's own evidence (or hard label). ms/scan = "
+        "median insertSemanticScan wall time (loading and evidence derivation excluded). "
+        "dropped % = points above the per-scan percentile threshold. Resolution "
      << o.resolution << " m; every other parameter at its SemanticConfig default unless the "
      << "variant changes it (see compare.json). All evidence here is **derived from hard "
         "labels**, not produced by an EDL network. Runs: "
@@ -262,8 +283,10 @@ void runCompare(const CompareOptions& o) {
   for (const Section& s : sections) {
     md << "## " << s.title << "\n\n";
     for (const auto& n : s.notes) md << "- " << n << "\n";
-    md << "\n" << kHeader;
+    md << "\n" << tableHeader();
     for (const auto& r : s.rows) md << r << "\n";
+    md << "\nError detection among labelled queries:\n\n" << detectionHeader(kLead);
+    for (const auto& r : s.detection_rows) md << r << "\n";
     md << "\n";
   }
   if (!rellis_note.empty()) md << rellis_note << "\n";

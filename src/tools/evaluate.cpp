@@ -15,6 +15,8 @@ namespace evidential_octomap::tools {
 namespace {
 struct EvalOptions {
   std::string map, data, classes, out, protocol = "reconstruction";
+  EvidenceOptions evidence;
+  std::string evidence_name = "onehot";
   std::string evidence_note = "unknown (not stored in the .ot; see the metrics.json of the run)";
   size_t scans = 0;
   bool synthetic = false;
@@ -38,8 +40,19 @@ void runEval(const EvalOptions& o) {
     predictions_note = "none in the dataset (input metrics count every query as unlabelled)";
   }
   const Protocol protocol = makeProtocol(o.protocol, scans.size());
-  const std::vector<Query> queries = buildQueries(scans, protocol.query_scans,
-                                                  classes.ignore_class);
+  // The input row: the per-point evidence of the query scans, derived as `map` derives it.
+  EvidenceOptions ev = o.evidence;
+  finishEvidenceOptions(o.evidence_name, &ev);
+  std::vector<std::vector<float>> evidence;
+  std::vector<float> query_evidence;
+  std::string input_description = "input predictions (hard labels), per point";
+  if (!derivedFromHardLabels(ev.source) || dataset.hasPredictions() || o.synthetic) {
+    evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
+    input_description = inputDescription(ev);
+  }
+  const std::vector<Query> queries =
+      buildQueries(scans, protocol.query_scans, classes.ignore_class,
+                   evidence.empty() ? nullptr : &evidence, &query_evidence);
   RunReport r;
   r.dataset = o.data;
   r.protocol = protocol.name;
@@ -53,7 +66,8 @@ void runEval(const EvalOptions& o) {
   r.config = tree->config();
   r.resolution = tree->getResolution();
   r.map = evaluateMap(*tree, queries, classes.ignore_class);
-  r.input = evaluatePredictions(queries, classes.numClasses(), classes.ignore_class);
+  r.input = evaluateInput(queries, query_evidence, classes.numClasses(), classes.ignore_class);
+  r.input_description = input_description;
   fillTreeStats(*tree, &r);
   const std::string md = toMarkdown(r, classes);
   std::cout << md;
@@ -85,6 +99,7 @@ void addEvalCommand(CLI::App& app) {
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
       ->capture_default_str();
   cmd->add_option("--out", o->out, "Also write metrics.json and metrics.md here");
+  addEvidenceOptions(cmd, &o->evidence, &o->evidence_name);
   cmd->add_option("--evidence-note", o->evidence_note,
                   "What evidence the map was built from (printed in the outputs)");
   cmd->add_flag("--synthetic-predictions", o->synthetic,

@@ -61,6 +61,10 @@ std::string describeEvidence(const EvidenceOptions& o) {
   return s.str();
 }
 
+std::string inputDescription(const EvidenceOptions& o) {
+  return "input evidence (" + evidenceSourceName(o.source) + "), per point";
+}
+
 // --- ConfusionModel ----------------------------------------------------------------------------
 
 ConfusionModel::ConfusionModel(int num_classes, int ignore_class)

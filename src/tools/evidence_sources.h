@@ -33,6 +33,8 @@ std::string evidenceSourceName(EvidenceSource source);
 bool derivedFromHardLabels(EvidenceSource source);
 // One line for captions and reports, e.g. "onehot, E=20 (derived from hard labels)".
 std::string describeEvidence(const EvidenceOptions& options);
+// Label of the input row of the metric tables, e.g. "input evidence (onehot), per point".
+std::string inputDescription(const EvidenceOptions& options);
 
 // Per-class confusion counts of each scan, so that the evidence of scan i can be estimated from
 // the other scans of a calibration set only.

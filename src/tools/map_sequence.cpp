@@ -44,11 +44,13 @@ void runMap(const MapOptions& o) {
   std::string predictions_note;
   if (o.synthetic) predictions_note = useSyntheticPredictions(&scans, classes, o.noise);
   const Protocol protocol = makeProtocol(o.protocol, scans.size());
-  const auto evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes);
+  const auto evidence =
+      deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
   MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,
                           !o.quiet, "mapping");
+  std::vector<float> query_evidence;
   const std::vector<Query> queries = buildQueries(scans, protocol.query_scans,
-                                                  classes.ignore_class);
+                                                  classes.ignore_class, &evidence, &query_evidence);
 
   RunReport r;
   r.dataset = o.data;
@@ -63,7 +65,10 @@ void runMap(const MapOptions& o) {
   r.config = run.tree->config();
   r.resolution = o.resolution;
   r.map = evaluateMap(*run.tree, queries, classes.ignore_class);
-  r.input = evaluatePredictions(queries, classes.numClasses(), classes.ignore_class);
+  r.input = evaluateInput(queries, query_evidence, classes.numClasses(), classes.ignore_class);
+  r.input_description = inputDescription(ev);
+  r.occupied_without_endpoint = static_cast<long long>(occupiedWithoutEndpoint(
+      *run.tree, endpointKeys(scans, protocol.map_scans, o.resolution)));
   r.ms_per_scan = run.ms_per_scan;
   r.totals = run.total;
   fillTreeStats(*run.tree, &r);
@@ -81,7 +86,7 @@ void runMap(const MapOptions& o) {
     };
     writePng(o.out + "/semantic.png", renderSemantic(*run.tree, classes, grid, caption("semantic map")));
     writePng(o.out + "/uncertainty.png",
-             renderUncertainty(*run.tree, r.map.scale, grid, caption("uncertainty")));
+             renderUncertainty(*run.tree, uncertaintyScale(*run.tree), grid, caption("uncertainty")));
     writePng(o.out + "/error.png",
              renderError(*run.tree, queries, grid, caption("errors of the GT queries")));
   }

@@ -5,6 +5,8 @@
 #include <numeric>
 #include <stdexcept>
 
+#include <octomap/OcTree.h>
+
 #include "progress_bar.h"
 
 namespace evidential_octomap::tools {
@@ -48,7 +50,8 @@ std::vector<Scan> loadScans(const Dataset& dataset, size_t limit, bool progress)
 }
 
 std::vector<Query> buildQueries(const std::vector<Scan>& scans, const std::vector<size_t>& which,
-                                int ignore_class) {
+                                int ignore_class, const std::vector<std::vector<float>>* evidence,
+                                std::vector<float>* query_evidence) {
   std::vector<Query> queries;
   for (size_t s : which) {
     const Scan& scan = scans.at(s);
@@ -56,20 +59,43 @@ std::vector<Query> buildQueries(const std::vector<Scan>& scans, const std::vecto
       throw std::runtime_error("scan " + scan.name + " has no ground-truth labels to query");
     }
     const bool has_pred = scan.predicted.size() == scan.size();
+    const float* e = nullptr;
+    size_t num_classes = 0;
+    if (evidence && query_evidence) {
+      e = evidence->at(s).data();
+      num_classes = evidence->at(s).size() / std::max<size_t>(1, scan.size());
+    }
     for (size_t i = 0; i < scan.size(); ++i) {
       if (scan.gt[i] < 0 || scan.gt[i] == ignore_class) continue;
       const Eigen::Vector3f p = scan.pointW(i);
       queries.push_back({octomap::point3d(p.x(), p.y(), p.z()), scan.gt[i],
                          has_pred ? scan.predicted[i] : -1});
+      if (e) query_evidence->insert(query_evidence->end(), e + i * num_classes, e + (i + 1) * num_classes);
     }
   }
   return queries;
 }
 
+std::vector<octomap::OcTreeKey> endpointKeys(const std::vector<Scan>& scans,
+                                             const std::vector<size_t>& which, double resolution) {
+  const octomap::OcTree keys_of(resolution);  // only for coordToKeyChecked
+  std::vector<octomap::OcTreeKey> keys;
+  for (size_t s : which) {
+    const Scan& scan = scans.at(s);
+    for (size_t i = 0; i < scan.size(); ++i) {
+      const Eigen::Vector3f p = scan.pointW(i);
+      octomap::OcTreeKey key;
+      if (keys_of.coordToKeyChecked(octomap::point3d(p.x(), p.y(), p.z()), key)) keys.push_back(key);
+    }
+  }
+  return keys;
+}
+
 std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans,
                                                   const std::vector<size_t>& which,
                                                   const EvidenceOptions& options,
-                                                  const ClassTable& classes) {
+                                                  const ClassTable& classes,
+                                                  const std::vector<size_t>& also) {
   const int C = classes.numClasses();
   ConfusionModel model(C, classes.ignore_class);
   if (options.source == EvidenceSource::kConfusion) {
@@ -84,6 +110,9 @@ std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans
   }
   std::vector<std::vector<float>> evidence(scans.size());
   for (size_t s : which) evidence[s] = deriveEvidence(scans.at(s), s, options, C, &model);
+  for (size_t s : also) {
+    if (evidence[s].empty()) evidence[s] = deriveEvidence(scans.at(s), s, options, C, &model);
+  }
   return evidence;
 }
 

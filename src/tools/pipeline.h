@@ -35,17 +35,25 @@ Protocol makeProtocol(const std::string& name, size_t num_scans);  // throws std
 std::vector<Scan> loadScans(const Dataset& dataset, size_t limit, bool progress);
 
 // GT-labelled points (gt != ignore_class) of `which` scans in the world frame, with the input's
-// prediction of each (-1 when the scan has none).
+// prediction of each (-1 when the scan has none). With `evidence` (indexed like `scans`) and
+// `query_evidence`, the C evidence values of every query are appended there, in query order.
 std::vector<Query> buildQueries(const std::vector<Scan>& scans, const std::vector<size_t>& which,
-                                int ignore_class);
+                                int ignore_class,
+                                const std::vector<std::vector<float>>* evidence = nullptr,
+                                std::vector<float>* query_evidence = nullptr);
 
-// Evidence of each scan in `which` (indexed like `scans`; other entries stay empty). The
-// confusion source is estimated leave-one-scan-out over `which` only, so query scans of the
-// held-out protocol never calibrate the map.
+// Keys of the voxels that hold a ray end point of scans `which` (for occupiedWithoutEndpoint).
+std::vector<octomap::OcTreeKey> endpointKeys(const std::vector<Scan>& scans,
+                                             const std::vector<size_t>& which, double resolution);
+
+// Evidence of each scan in `which` and `also` (indexed like `scans`; other entries stay empty).
+// Calibrated sources are fitted on the `which` scans only (leave-one-scan-out for those), so
+// the query scans of the held-out protocol (`also`) never calibrate anything.
 std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans,
                                                   const std::vector<size_t>& which,
                                                   const EvidenceOptions& options,
-                                                  const ClassTable& classes);
+                                                  const ClassTable& classes,
+                                                  const std::vector<size_t>& also = {});
 
 struct MapRun {
   std::unique_ptr<EvidentialOcTree> tree;

@@ -19,7 +19,7 @@ namespace {
 
 const cv::Vec3b kBackground(255, 255, 255);
 const cv::Vec3b kNoSemantics(228, 228, 228);  // lighter than any grey class colour
-const cv::Vec3d kRight(60, 170, 40), kWrong(30, 30, 220), kUncovered(200, 140, 60);  // BGR
+const cv::Vec3d kRight(60, 170, 40), kWrong(30, 30, 220), kNoLabel(200, 140, 60);  // BGR
 constexpr int kLine = 20;
 constexpr int kPanel = 220;
 
@@ -209,20 +209,17 @@ cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& 
 
 cv::Mat errorLayer(const EvidentialOcTree& tree, const std::vector<Query>& queries,
                    const TopDownGrid& g) {
-  // Per pixel: counts of right / wrong / uncovered queries, drawn as a colour mix.
+  // Per pixel: counts of right / wrong / unlabelled queries, drawn as a colour mix.
   std::vector<cv::Vec3i> counts(size_t(g.width) * g.height, cv::Vec3i(0, 0, 0));
   for (const Query& q : queries) {
     int c, r;
     if (!g.toPixel(q.point_W.x(), q.point_W.y(), &c, &r)) continue;
     const EvidentialOcTreeNode* node = tree.search(q.point_W);
-    int kind = 2;  // uncovered
-    if (node && tree.isNodeOccupied(node)) {
-      const int label = node->hasSemantics() ? tree.opinion(node).label : -1;
-      kind = label == q.gt ? 0 : 1;
-    }
+    int kind = 2;  // no label: the voxel holds no evidence
+    if (node && node->hasSemantics()) kind = tree.opinion(node).label == q.gt ? 0 : 1;
     ++counts[size_t(r) * g.width + c][kind];
   }
-  const cv::Vec3d colors[3] = {kRight, kWrong, kUncovered};
+  const cv::Vec3d colors[3] = {kRight, kWrong, kNoLabel};
   cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
   for (int r = 0; r < g.height; ++r)
     for (int c = 0; c < g.width; ++c) {
@@ -245,8 +242,8 @@ cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& quer
   cv::Mat panel;
   cv::Mat canvas = compose(map, caption, &panel);
   legendEntry(panel, 0, cv::Vec3b(kRight), "right");
-  legendEntry(panel, 1, cv::Vec3b(kWrong), "wrong / no label");
-  legendEntry(panel, 2, cv::Vec3b(kUncovered), "uncovered (free/unknown)");
+  legendEntry(panel, 1, cv::Vec3b(kWrong), "wrong label");
+  legendEntry(panel, 2, cv::Vec3b(kNoLabel), "no label (no evidence)");
   cv::putText(panel, "colours mix per pixel", cv::Point(10, 80), cv::FONT_HERSHEY_SIMPLEX, 0.4,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   return canvas;

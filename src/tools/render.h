@@ -1,5 +1,5 @@
 // Top-down PNG renders of a map (OpenCV, tools only): semantic classes with a legend,
-// uncertainty with a colour bar, and errors of the evaluation queries (right / wrong / uncovered).
+// uncertainty with a colour bar, and errors of the evaluation queries (right / wrong / no label).
 // Each column of the map shows its highest occupied leaf; north (+y) is up.
 #pragma once
 
@@ -37,7 +37,7 @@ cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& quer
 
 // The map layers alone (no caption, legend or scale bar), one pixel per grid cell, BGR; white
 // where nothing is occupied, light grey (228) for occupied voxels without evidence. Error layer: per pixel
-// the mix of right (green), wrong (red) and uncovered (blue) queries.
+// the mix of right (green), wrong (red) and unlabelled (blue) queries.
 cv::Mat semanticLayer(const EvidentialOcTree& tree, const ClassTable& classes,
                       const TopDownGrid& grid, std::set<int>* classes_shown = nullptr);
 cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const UncertaintyScale& scale,

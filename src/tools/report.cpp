@@ -65,18 +65,61 @@ void fillTreeStats(const EvidentialOcTree& tree, RunReport* r) {
   r->memory_bytes = tree.memoryUsage();
 }
 
+std::string fixed(double value, int decimals) {
+  if (!std::isfinite(value)) return "–";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(decimals) << value;
+  return s.str();
+}
+
+nlohmann::json qualityJson(const QualityMetrics& q) {
+  using nlohmann::json;
+  json detection = json::object();
+  for (const ErrorDetection& d : q.error_detection) {
+    json rates = json::array(), means = json::array();
+    for (double v : d.error_rate_by_decile) rates.push_back(num(v));
+    for (double v : d.mean_output_by_decile) means.push_back(num(v));
+    detection[d.output] = {{"auroc", num(d.auroc)},
+                           {"aurc", num(d.aurc)},
+                           {"error_rate_by_decile", rates},
+                           {"mean_output_by_decile", means}};
+  }
+  json reliability = json::array();
+  for (const ReliabilityBin& b : q.reliability) {
+    reliability.push_back({{"lower", b.lower},
+                           {"upper", b.upper},
+                           {"count", b.count},
+                           {"mean_confidence", num(b.count ? b.mean_confidence : NAN)},
+                           {"accuracy", num(b.count ? b.accuracy : NAN)}});
+  }
+  return {{"queries", q.queries},
+          {"labelled", q.labelled},
+          {"miou_all_queries", num(q.miou_all)},
+          {"acc_all_queries", num(q.acc_all)},
+          {"miou_labelled", num(q.miou_labelled)},
+          {"acc_labelled", num(q.acc_labelled)},
+          {"brier", num(q.brier)},
+          {"nll", num(q.nll)},
+          {"ece", num(q.ece)},
+          {"error_rate_labelled", num(q.error_rate_labelled)},
+          {"error_detection", detection},
+          {"reliability", reliability}};
+}
+
 nlohmann::json toJson(const RunReport& r, const ClassTable& classes) {
   using nlohmann::json;
   const int C = classes.numClasses();
+  const QualityMetrics& mq = r.map.quality;
   json per_class = json::array();
   for (int c = 0; c < C; ++c) {
     if (c == classes.ignore_class) continue;
     per_class.push_back({{"class", c},
                          {"name", classes.names[c]},
-                         {"gt_queries", r.map.confusion_all.gtCount(c)},
-                         {"present_in_gt", r.map.confusion_all.presentInGt(c)},
-                         {"map_iou", num(r.map.confusion.iou(c))},
-                         {"input_iou", num(r.input.confusion.iou(c))}});
+                         {"gt_queries", mq.all.gtCount(c)},
+                         {"present_in_gt", mq.all.presentInGt(c)},
+                         {"map_iou_all_queries", num(mq.all.iou(c))},
+                         {"map_iou_labelled", num(mq.labelled_only.iou(c))},
+                         {"input_iou", num(r.input.all.iou(c))}});
   }
   json j;
   j["dataset"] = r.dataset;
@@ -94,23 +137,15 @@ nlohmann::json toJson(const RunReport& r, const ClassTable& classes) {
   std::ostringstream printed;
   r.config.print(printed);
   j["parameters_text"] = printed.str();
-  j["map"] = {{"queries", r.map.queries},
-              {"covered", r.map.covered},
-              {"o_acc", num(r.map.occupied_accuracy)},
-              {"miou", num(r.map.miou)},
-              {"acc", num(r.map.accuracy)},
-              {"miou_all_queries", num(r.map.miou_all)},
-              {"acc_all_queries", num(r.map.accuracy_all)},
-              {"brier", num(r.map.brier)},
-              {"uncertainty_normalisation", r.map.scale.describe()},
-              {"uncertainty_scaled", r.map.scale.scaled},
-              {"uncertainty_min", r.map.scale.min},
-              {"uncertainty_max", r.map.scale.max},
-              {"mean_u_correct", num(r.map.mean_u_correct)},
-              {"mean_u_wrong", num(r.map.mean_u_wrong)}};
-  j["input_predictions"] = {{"queries", r.input.queries},
-                            {"miou", num(r.input.miou)},
-                            {"acc", num(r.input.accuracy)}};
+  j["metric_definitions"] = "include/evidential_octomap/metrics.h";
+  j["map"] = qualityJson(mq);
+  j["map"]["occupied"] = r.map.occupied;
+  j["map"]["semantic_coverage"] = num(r.map.semantic_coverage);
+  j["map"]["occupancy_coverage"] = num(r.map.occupancy_coverage);
+  j["map"]["occupied_without_endpoint"] =
+      r.occupied_without_endpoint >= 0 ? json(r.occupied_without_endpoint) : json(nullptr);
+  j["input"] = qualityJson(r.input);
+  j["input"]["description"] = r.input_description;
   j["per_class"] = per_class;
   j["timing"] = {{"what", "insertSemanticScan wall time per scan (loading and evidence "
                           "derivation excluded)"},
@@ -131,6 +166,50 @@ nlohmann::json toJson(const RunReport& r, const ClassTable& classes) {
   return j;
 }
 
+std::string qualityHeader(const std::string& lead) {
+  const std::string cols =
+      " mIoU all % | Acc all % | mIoU lab. % | Acc lab. % | sem. cov. % | occ. cov. % | Brier | "
+      "NLL | ECE |";
+  std::string rule = "|";
+  for (char ch : lead + cols)
+    if (ch == '|') rule += "---|";
+  return "|" + lead + cols + "\n" + rule + "\n";
+}
+
+std::string qualityCells(const QualityMetrics& q, double sem, double occ) {
+  std::ostringstream s;
+  s << " " << percent(q.miou_all) << " | " << percent(q.acc_all) << " | "
+    << percent(q.miou_labelled) << " | " << percent(q.acc_labelled) << " | " << percent(sem)
+    << " | " << percent(occ) << " | " << fixed(q.brier, 4) << " | " << fixed(q.nll, 3) << " | "
+    << fixed(q.ece, 4) << " |";
+  return s.str();
+}
+
+std::string detectionHeader(const std::string& lead) {
+  std::string cols;
+  for (const std::string& o : kUncertaintyOutputs) cols += " AUROC " + o + " |";
+  for (const std::string& o : kUncertaintyOutputs) cols += " AURC " + o + " |";
+  cols += " error rate (labelled) % |";
+  std::string rule = "|";
+  for (char ch : lead + cols)
+    if (ch == '|') rule += "---|";
+  return "|" + lead + cols + "\n" + rule + "\n";
+}
+
+std::string detectionCells(const QualityMetrics& q) {
+  std::ostringstream s;
+  for (const std::string& o : kUncertaintyOutputs) {
+    const ErrorDetection* d = q.detection(o);
+    s << " " << fixed(d ? d->auroc : NAN, 3) << " |";
+  }
+  for (const std::string& o : kUncertaintyOutputs) {
+    const ErrorDetection* d = q.detection(o);
+    s << " " << fixed(d ? d->aurc : NAN, 4) << " |";
+  }
+  s << " " << percent(q.error_rate_labelled) << " |";
+  return s.str();
+}
+
 std::string toMarkdown(const RunReport& r, const ClassTable& classes) {
   std::ostringstream s;
   s << "# Map metrics: " << r.variant << "\n\n";
@@ -143,26 +222,31 @@ std::string toMarkdown(const RunReport& r, const ClassTable& classes) {
   if (r.evidence_derived) s << " — derived from hard labels, not network evidence";
   s << "\n- predictions: " << (r.predictions_note.empty() ? "as shipped with the dataset"
                                                            : r.predictions_note)
-    << "\n- resolution " << r.resolution << " m; BS uncertainty: " << r.map.scale.describe()
-    << "\n- queries: " << r.map.queries << " GT-labelled points (class "
+    << "\n- resolution " << r.resolution << " m; queries: " << r.map.quality.queries
+    << " GT-labelled points (class "
     << (classes.ignore_class >= 0 ? classes.names[classes.ignore_class] : std::string("none"))
-    << " excluded), covered " << r.map.covered << "\n\n";
-  s << "| | mIoU % | Acc % | O.Acc % | BS | ms/scan (median) |\n|---|---|---|---|---|---|\n";
-  s << "| input predictions, per point | " << percent(r.input.miou) << " | "
-    << percent(r.input.accuracy) << " | – | – | – |\n";
-  s << "| map (" << r.variant << ") | " << percent(r.map.miou) << " | "
-    << percent(r.map.accuracy) << " | " << percent(r.map.occupied_accuracy) << " | "
-    << std::fixed << std::setprecision(4) << r.map.brier << " | " << std::setprecision(0)
-    << median(r.ms_per_scan) << " |\n\n";
-  s << "Over all queries (an uncovered query counts as wrong): mIoU " << percent(r.map.miou_all)
-    << " %, Acc " << percent(r.map.accuracy_all) << " %. Mean scaled uncertainty of covered "
-    << "correct / wrong queries: " << std::setprecision(3) << r.map.mean_u_correct << " / "
-    << r.map.mean_u_wrong << ".\n\n";
-  s << "| class | GT queries | map IoU % | input IoU % |\n|---|---|---|---|\n";
+    << " excluded), the same for every row\n";
+  if (r.occupied_without_endpoint >= 0) {
+    s << "- occupied voxels holding no ray end point: " << r.occupied_without_endpoint << "\n";
+  }
+  s << "\n" << qualityHeader(" |");
+  s << "| " << r.input_description << " |"
+    << qualityCells(r.input, std::nan(""), std::nan("")) << "\n";
+  s << "| map (" << r.variant << ") |"
+    << qualityCells(r.map.quality, r.map.semantic_coverage, r.map.occupancy_coverage) << "\n\n";
+  s << "Error detection among labelled queries (AUROC of each uncertainty output for \"the label "
+       "is wrong\"; AURC, lower is better):\n\n"
+    << detectionHeader(" |");
+  s << "| " << r.input_description << " |" << detectionCells(r.input) << "\n";
+  s << "| map (" << r.variant << ") |" << detectionCells(r.map.quality) << "\n\n";
+  s << "Insert: median " << fixed(median(r.ms_per_scan), 0) << " ms/scan (wall).\n\n";
+  s << "| class | GT queries | map IoU (all queries) % | map IoU (labelled) % | input IoU % |\n"
+    << "|---|---|---|---|---|\n";
   for (int c = 0; c < classes.numClasses(); ++c) {
-    if (c == classes.ignore_class || !r.map.confusion_all.presentInGt(c)) continue;
-    s << "| " << classes.names[c] << " | " << r.map.confusion_all.gtCount(c) << " | "
-      << percent(r.map.confusion.iou(c)) << " | " << percent(r.input.confusion.iou(c)) << " |\n";
+    if (c == classes.ignore_class || !r.map.quality.all.presentInGt(c)) continue;
+    s << "| " << classes.names[c] << " | " << r.map.quality.all.gtCount(c) << " | "
+      << percent(r.map.quality.all.iou(c)) << " | " << percent(r.map.quality.labelled_only.iou(c))
+      << " | " << percent(r.input.all.iou(c)) << " |\n";
   }
   s << "\nParameters (SemanticConfig):\n\n```\n";
   r.config.print(s);

@@ -28,7 +28,9 @@ struct RunReport {
   SemanticConfig config;
   double resolution = 0.2;
   MapMetrics map;
-  PredictionMetrics input;
+  QualityMetrics input;                  // the input's per-point answers on the same queries
+  std::string input_description;        // e.g. "input evidence (onehot, E=20), per point"
+  long long occupied_without_endpoint = -1;  // -1: not measured (e.g. eval of a saved map)
   std::vector<double> ms_per_scan;
   InsertStats totals;
   size_t leaves = 0, semantic_nodes = 0, memory_bytes = 0;
@@ -36,6 +38,8 @@ struct RunReport {
 
 // Every SemanticConfig field, parsed from SemanticConfig::print (so new fields appear too).
 nlohmann::json configJson(const SemanticConfig& config);
+// The metric set of one row (map or input) as JSON.
+nlohmann::json qualityJson(const QualityMetrics& q);
 nlohmann::json toJson(const RunReport& report, const ClassTable& classes);
 std::string toMarkdown(const RunReport& report, const ClassTable& classes);
 // Fills leaves / semantic_nodes / memory_bytes from the tree.
@@ -46,5 +50,15 @@ void writeText(const std::string& path, const std::string& text);
 
 double median(std::vector<double> values);
 std::string percent(double fraction, int decimals = 1);  // "38.0", "nan" -> "–"
+std::string fixed(double value, int decimals);           // "0.1234", "nan" -> "–"
+
+// The metric columns shared by `map`, `eval` and `compare` tables: accuracy and calibration,
+// then error detection (AUROC and AURC of every uncertainty output). Headers end with the rule
+// line; cells start and end with "|". NaN (e.g. coverage of the input row) prints as "–".
+std::string qualityHeader(const std::string& leading_columns);
+std::string qualityCells(const QualityMetrics& q, double semantic_coverage,
+                         double occupancy_coverage);
+std::string detectionHeader(const std::string& leading_columns);
+std::string detectionCells(const QualityMetrics& q);
 
 }  // namespace evidential_octomap::tools

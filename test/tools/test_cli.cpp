@@ -64,11 +64,13 @@ Eigen::Matrix4d parse3x4(const std::string& text) {
   return T;
 }
 
-// The metrics of DESIGN §6 recomputed from scratch for scans 000000 and 000001.
+// The metrics of DESIGN §6 recomputed from scratch for scans 000000 and 000001: the map's
+// answer at a query is its voxel's label when the voxel holds evidence (dempster payload L,
+// p^c = (e^{L^c} - 1 + 1/C) u with u = 1 / (sum e^L - C + 1)), else no label and uniform p.
 struct Independent {
-  size_t queries = 0, covered = 0, correct = 0;
+  size_t queries = 0, labelled = 0, occupied = 0, correct = 0;
   double brier = 0.0;
-  double miou = 0.0;
+  double miou_all = 0.0;
 };
 
 Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
@@ -78,7 +80,7 @@ Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
   while (std::getline(calib, line))
     if (line.rfind("Tr:", 0) == 0) Tr = parse3x4(line.substr(3));
   const int C = classes.numClasses();
-  std::vector<size_t> tp(C, 0), fp(C, 0), fn(C, 0), gt_count(C, 0);
+  std::vector<size_t> tp(C, 0), fp(C, 0), fn(C, 0);
   Independent r;
   for (const char* name : {"000000", "000001"}) {
     std::getline(poses, line);
@@ -91,15 +93,21 @@ Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
       const Eigen::Vector3d p =
           (T * Eigen::Vector4d(xyzr[4 * i], xyzr[4 * i + 1], xyzr[4 * i + 2], 1.0)).head<3>();
       ++r.queries;
-      ++gt_count[gt];
       const auto* node = tree.search(float(p.x()), float(p.y()), float(p.z()));
-      if (!node || node->getLogOdds() < 0.0f) continue;  // occupied: log-odds >= 0 (p >= 0.5)
-      ++r.covered;
-      const auto op = tree.opinion(node);
-      const int s = node->hasSemantics() ? op.label : -1;
-      const double u = node->hasSemantics() ? op.uncertainty : 1.0;
-      const double wrong = s == gt ? 0.0 : 1.0;
-      r.brier += (u - wrong) * (u - wrong);
+      if (node && node->getLogOdds() >= 0.0f) ++r.occupied;  // occupied: p >= 0.5
+      std::vector<long double> prob(C, 1.0L / C);
+      int s = -1;
+      if (const float* L = node ? tree.payload(node) : nullptr) {
+        long double sum = 0.0L, best = 0.0L;
+        for (int c = 0; c < C; ++c) {
+          sum += std::exp((long double)L[c]);
+          if (L[c] > best) best = L[c], s = c;
+        }
+        const long double u = 1.0L / (sum - C + 1);
+        for (int c = 0; c < C; ++c) prob[c] = (std::exp((long double)L[c]) - 1 + 1.0L / C) * u;
+      }
+      for (int c = 0; c < C; ++c) r.brier += double((prob[c] - (c == gt)) * (prob[c] - (c == gt)));
+      if (s >= 0) ++r.labelled;
       if (s == gt) {
         ++r.correct;
         ++tp[gt];
@@ -109,15 +117,15 @@ Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
       }
     }
   }
-  r.brier /= double(r.covered);
-  // mIoU over classes present in GT among covered queries (tp + fn > 0).
+  r.brier /= double(r.queries);
+  // mIoU over classes present in GT, every query counted (no label = wrong).
   int n = 0;
   for (int c = 0; c < C; ++c) {
     if (c == classes.ignore_class || tp[c] + fn[c] == 0) continue;
-    r.miou += double(tp[c]) / double(tp[c] + fp[c] + fn[c]);
+    r.miou_all += double(tp[c]) / double(tp[c] + fp[c] + fn[c]);
     ++n;
   }
-  r.miou /= n;
+  r.miou_all /= n;
   return r;
 }
 
@@ -154,12 +162,22 @@ TEST_F(CliEndToEnd, MetricsJsonIsLabelledAndInRange) {
   EXPECT_EQ(j["parameters"]["rule"], "dempster");
   EXPECT_EQ(j["parameters"]["drop_percent"], 10.0);
   EXPECT_EQ(j["map_scans"].size(), 2u);
-  for (const char* k : {"o_acc", "miou", "acc", "brier"}) {
+  for (const char* k : {"semantic_coverage", "occupancy_coverage", "miou_all_queries",
+                        "acc_all_queries", "miou_labelled", "ece"}) {
     const double v = j["map"][k];
     EXPECT_GE(v, 0.0) << k;
     EXPECT_LE(v, 1.0) << k;
   }
-  EXPECT_GT(double(j["map"]["miou"]), 0.2);
+  EXPECT_GE(double(j["map"]["brier"]), 0.0);
+  EXPECT_LE(double(j["map"]["brier"]), 2.0);
+  for (const char* row : {"map", "input"}) {
+    for (const char* output : {"u", "conflict", "1-max_p", "dissonance"}) {
+      EXPECT_TRUE(j[row]["error_detection"].contains(output)) << row << " " << output;
+    }
+    EXPECT_EQ(j[row]["queries"], j["map"]["queries"]) << "the same queries for every row";
+  }
+  EXPECT_GT(double(j["map"]["miou_all_queries"]), 0.2);
+  EXPECT_EQ(j["map"]["occupied_without_endpoint"], 0) << "no kernel-made occupied voxels";
   const std::string md = map_result_.output;
   EXPECT_NE(md.find("derived from hard labels"), std::string::npos);
   EXPECT_NE(md.find("reconstruction"), std::string::npos);
@@ -175,11 +193,12 @@ TEST_F(CliEndToEnd, MetricsEqualAnIndependentComputation) {
   const Independent ind = recompute(*tree, classes);
   const auto j = readJson(out_ + "/map/metrics.json");
   EXPECT_EQ(size_t(j["map"]["queries"]), ind.queries);
-  EXPECT_EQ(size_t(j["map"]["covered"]), ind.covered);
-  EXPECT_NEAR(double(j["map"]["o_acc"]), double(ind.covered) / ind.queries, 1e-12);
-  EXPECT_NEAR(double(j["map"]["acc"]), double(ind.correct) / ind.covered, 1e-12);
-  EXPECT_NEAR(double(j["map"]["miou"]), ind.miou, 1e-12);
-  EXPECT_NEAR(double(j["map"]["brier"]), ind.brier, 1e-9);
+  EXPECT_EQ(size_t(j["map"]["labelled"]), ind.labelled);
+  EXPECT_EQ(size_t(j["map"]["occupied"]), ind.occupied);
+  EXPECT_NEAR(double(j["map"]["semantic_coverage"]), double(ind.labelled) / ind.queries, 1e-12);
+  EXPECT_NEAR(double(j["map"]["acc_all_queries"]), double(ind.correct) / ind.queries, 1e-12);
+  EXPECT_NEAR(double(j["map"]["miou_all_queries"]), ind.miou_all, 1e-12);
+  EXPECT_NEAR(double(j["map"]["brier"]), ind.brier, 1e-6);
 }
 
 TEST_F(CliEndToEnd, InfoReadsTheMapBack) {
@@ -201,10 +220,12 @@ TEST_F(CliEndToEnd, EvalOfTheSavedMapReproducesTheMetrics) {
                        " --classes " + kittiClasses() + " --scans 2 --out " + out_ + "/eval");
   ASSERT_EQ(r.status, 0) << r.output;
   const auto a = readJson(out_ + "/map/metrics.json"), b = readJson(out_ + "/eval/metrics.json");
-  for (const char* k : {"queries", "covered", "o_acc", "miou", "acc", "brier"}) {
+  for (const char* k : {"queries", "labelled", "occupied", "semantic_coverage",
+                        "miou_all_queries", "acc_all_queries", "brier", "nll", "ece",
+                        "error_detection"}) {
     EXPECT_EQ(a["map"][k], b["map"][k]) << k;
   }
-  EXPECT_EQ(a["input_predictions"], b["input_predictions"]);
+  EXPECT_EQ(a["input"], b["input"]);
 }
 
 TEST_F(CliEndToEnd, ExportAndMergeWriteReadableMaps) {
@@ -269,7 +290,7 @@ TEST(CliRellis, SyntheticPredictionsAreLabelledInTheOutputs) {
   EXPECT_NE(std::string(j["predictions"]).find("synthetic"), std::string::npos);
   EXPECT_EQ(j["class_table"], "rellis3d");
   EXPECT_EQ(size_t(j["map"]["queries"]), 62788u);  // 77,708 valid points minus 14,920 void
-  const double input_acc = j["input_predictions"]["acc"];
+  const double input_acc = j["input"]["acc_all_queries"];
   EXPECT_GT(input_acc, 0.75);  // about 1 - point rate - region rate
   EXPECT_LT(input_acc, 0.95);
 }

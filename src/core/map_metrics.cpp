@@ -1,0 +1,155 @@
+// What a map or the input answers at each query (metrics.h), and the evaluation loops.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <unordered_set>
+
+#include "evidential_octomap/metrics.h"
+
+namespace evidential_octomap {
+
+double dissonance(const std::vector<float>& belief) {
+  double total = 0.0;
+  const size_t n = belief.size();
+  for (size_t k = 0; k < n; ++k) {
+    if (!(belief[k] > 0.0f)) continue;
+    double others = 0.0, balanced = 0.0;
+    for (size_t j = 0; j < n; ++j) {
+      if (j == k || !(belief[j] > 0.0f)) continue;
+      others += belief[j];
+      balanced += belief[j] * (1.0 - std::fabs(double(belief[j]) - belief[k]) /
+                                         (double(belief[j]) + belief[k]));
+    }
+    if (others > 0.0) total += belief[k] * balanced / others;
+  }
+  return total;
+}
+
+Answer answerOf(const VoxelOpinion& o, const FusionRule& rule) {
+  Answer a;
+  a.label = o.label;
+  if (o.label < 0) return a;
+  const int num_classes = static_cast<int>(o.belief.size());
+  a.probability.resize(num_classes);
+  // Dissonance of the subjective-logic belief masses; the Dirichlet rules have none apart from
+  // their expected probabilities, read as a dogmatic opinion.
+  std::vector<float> masses = o.belief;
+  if (rule.uncertaintyIsMass()) {
+    for (int c = 0; c < num_classes; ++c)
+      a.probability[c] = o.belief[c] + o.uncertainty / num_classes;
+  } else {
+    a.probability = o.belief;  // alpha / S
+  }
+  const float max_p = *std::max_element(a.probability.begin(), a.probability.end());
+  a.uncertainty = {o.uncertainty, o.conflict, 1.0f - max_p, float(dissonance(masses))};
+  return a;
+}
+
+Answer answerOfEvidence(const float* evidence, int num_classes) {
+  static const auto kDempster = FusionRule::create(FusionRuleType::kDempster);
+  // L^c = ln(1 + e^c / C) is the payload of a voxel that fused this point alone at k = 1.
+  std::vector<float> payload(num_classes);
+  for (int c = 0; c < num_classes; ++c)
+    payload[c] = float(std::log1p(double(evidence[c]) / num_classes));
+  // A point without any evidence is vacuous: no label (uniform p), like an empty voxel.
+  return answerOf(kDempster->readout(payload.data(), num_classes), *kDempster);
+}
+
+MapMetrics evaluateMap(const EvidentialOcTree& tree, const std::vector<Query>& queries,
+                       int ignore_class) {
+  const int num_classes = tree.numClasses();
+  MapMetrics m;
+  QualityAccumulator acc(num_classes, ignore_class);
+  for (const Query& q : queries) {
+    if (q.gt < 0 || q.gt >= num_classes || q.gt == ignore_class) continue;
+    const EvidentialOcTreeNode* node = tree.search(q.point_W);
+    if (node != nullptr && tree.isNodeOccupied(node)) ++m.occupied;
+    const bool labelled = node != nullptr && node->hasSemantics();
+    acc.add(q.gt, labelled ? answerOf(tree.opinion(node), tree.rule()) : Answer());
+  }
+  m.quality = acc.finish();
+  const double n = double(m.quality.queries);
+  m.occupancy_coverage = n > 0 ? double(m.occupied) / n : std::nan("");
+  m.semantic_coverage = n > 0 ? double(m.quality.labelled) / n : std::nan("");
+  return m;
+}
+
+QualityMetrics evaluateInput(const std::vector<Query>& queries, const std::vector<float>& evidence,
+                             int num_classes, int ignore_class) {
+  QualityAccumulator acc(num_classes, ignore_class);
+  const bool has_evidence = evidence.size() == queries.size() * size_t(num_classes);
+  for (size_t i = 0; i < queries.size(); ++i) {
+    const Query& q = queries[i];
+    Answer a;
+    if (has_evidence) {
+      a = answerOfEvidence(&evidence[i * num_classes], num_classes);
+    } else if (q.predicted >= 0 && q.predicted < num_classes) {
+      a.label = q.predicted;  // a hard label: one-hot p, no uncertainty
+      a.probability.assign(num_classes, 0.0f);
+      a.probability[q.predicted] = 1.0f;
+      a.uncertainty.assign(kUncertaintyOutputs.size(), 0.0f);
+    }
+    acc.add(q.gt, a);
+  }
+  return acc.finish();
+}
+
+size_t occupiedWithoutEndpoint(const EvidentialOcTree& tree,
+                               const std::vector<octomap::OcTreeKey>& endpoints) {
+  const std::unordered_set<octomap::OcTreeKey, octomap::OcTreeKey::KeyHash> ends(endpoints.begin(),
+                                                                                 endpoints.end());
+  const unsigned max_depth = tree.getTreeDepth();
+  size_t count = 0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    // A pruned leaf of depth d covers 2^(max_depth - d) voxels per axis from its first key.
+    const int side = 1 << (max_depth - it.getDepth());
+    const octomap::OcTreeKey first = it.getIndexKey();
+    for (int x = 0; x < side; ++x)
+      for (int y = 0; y < side; ++y)
+        for (int z = 0; z < side; ++z) {
+          const octomap::OcTreeKey key(first[0] + x, first[1] + y, first[2] + z);
+          count += ends.count(key) == 0;
+        }
+  }
+  return count;
+}
+
+// --- display range ----------------------------------------------------------------------------
+
+double UncertaintyScale::apply(double u) const {
+  double t = u;
+  if (scaled) t = max > min ? (u - min) / (max - min) : 0.0;
+  return std::min(1.0, std::max(0.0, t));
+}
+
+std::string UncertaintyScale::describe() const {
+  if (!scaled) return "uncertainty is a mass in [0,1], used as is";
+  std::ostringstream s;
+  s << "min-max scaled over the map's semantic leaves (min " << min << ", max " << max << ")";
+  return s.str();
+}
+
+UncertaintyScale uncertaintyScale(const EvidentialOcTree& tree) {
+  UncertaintyScale scale;
+  if (tree.rule().uncertaintyIsMass()) return scale;
+  scale.scaled = true;
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!it->hasSemantics()) continue;
+    const double u = tree.opinion(&*it).uncertainty;
+    lo = std::min(lo, u);
+    hi = std::max(hi, u);
+  }
+  if (lo > hi) {  // no semantic leaf at all
+    lo = 0.0;
+    hi = 1.0;
+  }
+  scale.min = lo;
+  scale.max = hi;
+  return scale;
+}
+
+}  // namespace evidential_octomap
