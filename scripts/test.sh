@@ -5,13 +5,14 @@
 #   2. core, tools and their tests with plain CMake in build/core (Release), gated on ctest;
 #   3. the catkin package (core + ROS node, messages, rostests) in the workspace
 #      build/.catkin_ws (src/evidential_octomap -> this repository), gated on catkin_test_results;
+#   3. the README's first command, `bash scripts/demo.sh`, end to end on 2 of the 10 scans;
 #   4. the Python package: `pip install .` into the virtual environment build/python-venv
 #      (skipped when its sources are unchanged since the last install), then pytest.
 #
 # Both builds are incremental, so a second run only re-runs the tests. JOBS=N sets parallelism
 # (default 2). Exits non-zero when anything fails. The last line is always
 #     tests: N passed, M failed
-# with N and M summed over ctest, catkin_test_results and pytest. A stage that fails before it can report
+# with N and M summed over ctest, catkin_test_results, the demo (one test) and pytest. A stage that fails before it can report
 # test counts (configure or build error, ctest crash) adds 1 to M, so a failing run never reads
 # "0 failed".
 set -euo pipefail
@@ -193,6 +194,38 @@ else
     fi
   else
     stage_failed "catkin build"
+    failed=$((failed + 1))
+  fi
+fi
+
+# ---- 3. the README's first command, end to end --------------------------------------------------
+# demo.sh exactly as a user runs it (dependencies, CLI build, map, metrics, pictures), on 2 scans
+# so it costs seconds; it must exit 0, build only the CLI (no test targets: the pipefail bug of
+# issue 14 built everything), print the map's metrics row and write every output.
+if ((!core_built)); then
+  echo "test.sh: skipping the demo stage: the core does not build"
+else
+  note "demo: DEMO_SCANS=2 bash scripts/demo.sh"
+  t0=${SECONDS}
+  demo_out="build/demo_test"
+  set +e
+  DEMO_SCANS=2 DEMO_OUT="${demo_out}" DEMO_VIEW=0 JOBS="${jobs}" bash scripts/demo.sh \
+    >"${logs}/demo.log" 2>&1
+  demo_rc=$?
+  set -e
+  demo_ok=1
+  ((demo_rc == 0)) || demo_ok=0
+  grep -q '^| map (dempster) |' "${logs}/demo.log" || demo_ok=0
+  ! grep -q 'Built target test_' "${logs}/demo.log" || demo_ok=0
+  for f in map.ot metrics.md metrics.json semantic.png uncertainty.png error.png; do
+    [[ -s "${demo_out}/demo/${f}" ]] || demo_ok=0
+  done
+  echo "test.sh: demo ran in $((SECONDS - t0)) s (exit ${demo_rc}); log ${logs}/demo.log"
+  if ((demo_ok)); then
+    passed=$((passed + 1))
+  else
+    tail -n 30 "${logs}/demo.log"
+    stage_failed "demo.sh"
     failed=$((failed + 1))
   fi
 fi
