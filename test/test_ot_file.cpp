@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +22,7 @@
 #include <sstream>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
@@ -245,6 +247,16 @@ TEST(BtFile, LoadMapRefusesABtFileNamingThePath) {
   }
 }
 
+TEST(BtFile, HeaderNamesThePlainOcTreeForStockTools) {
+  TempDir dir;
+  const std::string path = dir.file("map.bt");
+  saveBinaryOccupancy(*makeMap("dempster", 1), path);
+  const std::string bytes = readBytes(path);
+  EXPECT_EQ(bytes.rfind("# Octomap OcTree binary file\n", 0), 0u);
+  EXPECT_NE(bytes.find("\nid OcTree\n"), std::string::npos);
+  EXPECT_EQ(bytes.find("EvidentialOcTree"), std::string::npos) << "stock tools echo this id";
+}
+
 // --- ColorOcTree export
 // ----------------------------------------------------------------------------
 
@@ -254,6 +266,59 @@ ClassTable threeClasses() {
   table.names = {"ground", "box", "other"};
   table.colors = {{200, 10, 10}, {10, 200, 10}, {10, 10, 200}};
   return table;
+}
+
+// --- stock OctoMap tools (Debian's octomap-tools), where installed
+// ------------------------------------------------------------------
+
+bool haveTool(const std::string& name) {
+  return std::system(("command -v " + name + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+// Runs `command` in a shell; returns its exit code and what it printed (stdout and stderr).
+std::pair<int, std::string> runTool(const std::string& command) {
+  std::string out;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return {-1, "popen failed"};
+  char buffer[4096];
+  while (size_t n = std::fread(buffer, 1, sizeof(buffer), pipe)) out.append(buffer, n);
+  const int status = ::pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+TEST(StockTools, ConvertOctreeReadsOurBtAsAPlainOcTree) {
+  if (!haveTool("convert_octree")) GTEST_SKIP() << "convert_octree missing (Debian: octomap-tools)";
+  TempDir dir;
+  auto tree = makeMap("dempster");
+  const std::string bt = dir.file("map.bt"), ot = dir.file("converted.ot");
+  saveBinaryOccupancy(*tree, bt);
+  const auto [code, out] = runTool("convert_octree " + bt + " " + ot);
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("Reading binary octree type OcTree"), std::string::npos) << out;
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(ot));
+  auto* plain = dynamic_cast<octomap::OcTree*>(any.get());
+  ASSERT_NE(plain, nullptr) << out;
+  const auto expected = occupiedLeafKeys(*tree);
+  ASSERT_GT(expected.size(), 100u);
+  EXPECT_TRUE(occupiedLeafKeys(*plain) == expected);
+}
+
+// The ColorOcTree export is the file for stock viewers and converters: convert_octree turns it
+// into a .bt with our occupancy (octovis shows it; not run here, it needs a display).
+TEST(StockTools, ConvertOctreeReadsTheColorExport) {
+  if (!haveTool("convert_octree")) GTEST_SKIP() << "convert_octree missing (Debian: octomap-tools)";
+  TempDir dir;
+  auto tree = makeMap("dempster");
+  const auto color = toColorOcTree(*tree, threeClasses(), ColorMode::kClass);
+  const std::string ot = dir.file("color.ot"), bt = dir.file("color.bt");
+  ASSERT_TRUE(color->write(ot));
+  const auto [code, out] = runTool("convert_octree " + ot + " " + bt);
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("Reading octree type ColorOcTree"), std::string::npos) << out;
+  EXPECT_EQ(out.find("legacy"), std::string::npos) << out;
+  octomap::OcTree plain(0.1);
+  ASSERT_TRUE(plain.readBinary(bt));
+  EXPECT_TRUE(occupiedLeafKeys(plain) == occupiedLeafKeys(*tree));
 }
 
 TEST(ColorExport, ClassColoursSurviveAbstractOcTreeRead) {

@@ -19,6 +19,9 @@ void saveMap(const EvidentialOcTree& tree, const std::string& path);
 
 // Occupancy-only OctoMap binary (.bt), loadable by plain octomap::OcTree; atomic like saveMap.
 void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path);
+// The same .bt stream: OctoMap's binary header with `id OcTree` (the data is exactly a plain
+// OcTree's, so stock tools must not read or echo our own type id), then writeBinaryData.
+bool writeBinaryOccupancy(const EvidentialOcTree& tree, std::ostream& s);
 
 // Reads an .ot written by saveMap. Throws std::runtime_error for a missing path, a file that is
 // not an OctoMap file, a file of another tree type, or corrupt/truncated data.

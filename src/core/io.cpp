@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include <octomap/AbstractOcTree.h>
+#include <octomap/AbstractOccupancyOcTree.h>
 
 namespace evidential_octomap {
 namespace {
@@ -79,8 +80,26 @@ void saveMap(const EvidentialOcTree& tree, const std::string& path) {
   });
 }
 
+namespace {
+// OctoMap's first line of a .bt file (protected in AbstractOccupancyOcTree).
+struct BtHeader : octomap::AbstractOccupancyOcTree {
+  static const std::string& firstLine() { return binaryFileHeader; }
+};
+}  // namespace
+
+bool writeBinaryOccupancy(const EvidentialOcTree& tree, std::ostream& s) {
+  // As AbstractOccupancyOcTree::writeBinaryConst, but under the plain OcTree's id.
+  s << BtHeader::firstLine() << "\n"
+    << "# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
+    << "id OcTree\n"
+    << "size " << tree.size() << "\n"
+    << "res " << std::setprecision(17) << tree.getResolution() << "\n"
+    << "data\n";
+  return tree.writeBinaryData(s) && s.good();
+}
+
 void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path) {
-  writeAtomically(path, [&](std::ostream& s) { return tree.writeBinaryConst(s) && s.good(); });
+  writeAtomically(path, [&](std::ostream& s) { return writeBinaryOccupancy(tree, s); });
 }
 
 namespace {

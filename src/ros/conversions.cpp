@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "evidential_octomap/io.h"
 #include "evidential_octomap/subjective_logic.h"
 
 namespace evidential_octomap {
@@ -338,7 +339,7 @@ OccupancyMap toOccupancyMap(const EvidentialOcTree& tree, const std::string& fra
   msg.header.frame_id = frame_id;
   msg.resolution = tree.getResolution();
   std::stringstream s;
-  tree.writeBinaryConst(s);
+  writeBinaryOccupancy(tree, s);
   const std::string bytes = s.str();
   msg.data.assign(bytes.begin(), bytes.end());
   return msg;
