@@ -4,6 +4,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -23,6 +24,7 @@
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
+#include "../src/core/crc32.h"
 
 // Where sanitizers write their reports (weak: absent in builds without sanitizers).
 extern "C" void __sanitizer_set_report_fd(void* fd) __attribute__((weak));
@@ -211,13 +213,23 @@ void exercise(EvidentialOcTree& tree, bool heavy) {
   SemanticConfig one_thread = copy.config();
   one_thread.threads = 1;  // no thread team per input
   copy.setConfig(one_thread);
+  const std::string copy_before_scan = writeOt(copy);
   octomap::Pointcloud points;
   std::vector<float> evidence;
   for (int i = 0; i < 4; ++i) {
     points.push_back(0.5f * i, 0.3f, -0.2f * i);
     for (int c = 0; c < num_classes; ++c) evidence.push_back(c == i % num_classes ? 5.0f : 0.1f);
   }
-  copy.insertSemanticScan(points, evidence, octomap::point3d(0.f, 0.f, 0.5f));
+  // A file may hold a kernel no scan may use (beyond SemanticConfig::kMaxSupportLeaves): then
+  // the scan is refused before anything changes.
+  const std::string support = copy.config().supportProblem(copy.getResolution());
+  try {
+    copy.insertSemanticScan(points, evidence, octomap::point3d(0.f, 0.f, 0.5f));
+    require(support.empty(), "a scan with an unaffordable kernel was run");
+  } catch (const std::invalid_argument& e) {
+    require(!support.empty(), std::string("a scan was refused: ") + e.what());
+    require(writeOt(copy) == copy_before_scan, "a refused scan changed the map");
+  }
   for (auto it = copy.begin_tree(), end = copy.end_tree(); it != end; ++it) {
     checkOpinion(copy, &*it, "after insertSemanticScan");
   }
@@ -234,6 +246,21 @@ void fuzzFail(const std::string& what) {
 }
 
 void setAlwaysHeavy(bool always) { g_always_heavy = always; }
+
+void resealOtChecksum(uint8_t* data, size_t size) {
+  static const uint8_t kData[] = {'\n', 'd', 'a', 't', 'a', '\n', 'E', 'V', 'E', 'M'};
+  const uint8_t* end = data + size;
+  const uint8_t* at =
+      std::search(static_cast<const uint8_t*>(data), end, kData, kData + sizeof(kData));
+  if (at == end) return;
+  const size_t section = static_cast<size_t>(at - data) + 6;
+  uint32_t format = 0;
+  if (size < section + 8 + 4) return;
+  std::memcpy(&format, data + section + 4, 4);
+  if (format < 2) return;  // format 1 has no checksum
+  const uint32_t crc = crc32Update(0, data + section, size - 4 - section);
+  std::memcpy(data + size - 4, &crc, 4);
+}
 
 void silenceStderr() {
   const int saved = ::dup(2);

@@ -36,6 +36,10 @@ void silenceStderr();
 // keep libFuzzer fast; the replay harness makes it do so for every input.
 void setAlwaysHeavy(bool always);
 
+// Recomputes the trailing CRC-32 of a format-2 .ot data section in place (no-op for anything
+// else), so that mutations reach the parser behind the checksum instead of stopping at it.
+void resealOtChecksum(uint8_t* data, size_t size);
+
 [[noreturn]] void fuzzFail(const std::string& what);
 
 }  // namespace fuzz

@@ -257,6 +257,10 @@ int main(int argc, char** argv) {
   for (long i = 0; i < mutations && !corpus.empty(); ++i) {
     Bytes input = corpus[static_cast<size_t>(i) % corpus.size()];
     mutate(input, corpus, rng, ot);
+    // Three in four with a valid checksum, so most reach the parser and the invariant checks.
+    if (ot && rng.below(4) != 0) {
+      evidential_octomap::fuzz::resealOtChecksum(input.data(), input.size());
+    }
     if (verbose) std::cout << "mutation " << i << " (" << input.size() << " B)\n";
     execute(input, i);
   }

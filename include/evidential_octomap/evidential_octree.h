@@ -16,6 +16,7 @@
 
 #include "evidential_octomap/fusion_rule.h"
 #include "evidential_octomap/semantic_config.h"
+#include "evidential_octomap/sensor_model.h"
 
 namespace evidential_octomap {
 
@@ -65,6 +66,9 @@ struct InsertStats {
 class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNode> {
  public:
   static constexpr int kMaxClasses = 255;
+  // Resolutions a map may have: keys are 16 bit, so the map spans resolution * 65536, which must
+  // stay a finite float extent with room for voxel centres.
+  static constexpr double kMinResolution = 1e-6, kMaxResolution = 1e6;
 
   // num_classes in 1..255; class names default to "class_<i>". Throws std::invalid_argument.
   explicit EvidentialOcTree(double resolution, int num_classes = 1,
@@ -73,7 +77,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   EvidentialOcTree& operator=(const EvidentialOcTree&) = delete;
 
   // --- AbstractOcTree -------------------------------------------------------------------
-  EvidentialOcTree* create() const override { return new EvidentialOcTree(resolution); }
+  EvidentialOcTree* create() const override;
   std::string getTreeType() const override { return "EvidentialOcTree"; }
 
   // --- semantic settings ----------------------------------------------------------------
@@ -81,15 +85,25 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   const std::vector<std::string>& classNames() const { return class_names_; }
   void setClassNames(const std::vector<std::string>& names);  // size must be C
   const SemanticConfig& config() const { return config_; }
-  // Changing the rule re-interprets stored payloads, so it is refused while the map holds any.
+  // Throws std::invalid_argument for values SemanticConfig::problem() refuses. Changing the rule
+  // re-interprets stored payloads, so it is refused (std::logic_error) while the map holds any.
   void setConfig(const SemanticConfig& config);
   const FusionRule& rule() const { return *rule_; }
+  // OctoMap's occupancy model, set as one checked value (std::invalid_argument outside
+  // SensorModel's ranges). OctoMap's own setProbHit & co. stay available but unchecked: a tree
+  // set outside the ranges through them is refused by writeData and saveMap.
+  SensorModel sensorModel() const;
+  void setSensorModel(const SensorModel& model);
+  // "" when resolution, sensor model and semantic config are all inside the shared ranges, so
+  // that what writeData writes, readData reads back; else what is wrong.
+  std::string parameterProblem() const;
 
   // --- integration ----------------------------------------------------------------------
   // Inserts one scan: occupancy by OctoMap ray casting from origin_W, semantics by the
   // adaptive sparse kernel. points_W are in the world (tree) frame; evidence is N x C,
   // row-major, one evidence vector per point (each value finite and >= 0).
-  // Throws std::invalid_argument (and leaves the map unchanged) when evidence is malformed.
+  // Throws std::invalid_argument (and leaves the map unchanged) when evidence is malformed or the
+  // kernel support is beyond what a scan may cost (SemanticConfig::supportProblem).
   // With `unobserved` (a map of equal resolution, C and rule), the evidence this map drops
   // because its voxel has not been observed yet (kernel updates outside known space,
   // kernel_creates_leaves off) is added there instead: what a later chunk of a sequence hands
@@ -146,11 +160,19 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   bool pruneNode(EvidentialOcTreeNode* node) override;
   void clear() override;
   size_t memoryUsage() const override;
-  // The data section: semantic header, then every node (log-odds, child mask, payload).
+  // The data section (format in ot_format.cpp): semantic header, every node (log-odds, child
+  // mask, payload), a CRC-32 of the section. writeData fails the stream, writing nothing, when
+  // parameterProblem() is not "", and fails it part-way when an inner node is stale (OctoMap's
+  // lazy_eval updates or deleteNode without updateInnerNodes()). readData reads files of format
+  // 1 (no CRC) and 2, checks the CRC, every parameter and every inner node against its children.
   std::istream& readData(std::istream& s) override;
   std::ostream& writeData(std::ostream& s) const override;
   // Why the last readData failed (empty after a good read). A failed read leaves the tree empty.
   const std::string& readError() const { return read_error_; }
+  // True for a tree that AbstractOcTree::read created and never passed its data section: OctoMap
+  // skips readData when the header says "size 0", leaving C, names, rule and parameters at their
+  // defaults. readProblem() (io.h) checks this and readError() in one call.
+  bool dataSectionSkipped() const { return created_for_read_; }
 
  private:
   void setNumClasses(int num_classes);
@@ -167,12 +189,22 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
                    EvidentialOcTreeNode* dst);
   void updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth);
   void updateInnerNode(EvidentialOcTreeNode* node);
+  // The child whose payload an inner node summarises (largest sum, first on ties), or nullptr.
+  const EvidentialOcTreeNode* richestChild(const EvidentialOcTreeNode* node) const;
+  // "" when an inner node holds what updateInnerNode gives it (max child log-odds, the richest
+  // child's payload), else what differs.
+  std::string innerNodeProblem(const EvidentialOcTreeNode* node) const;
   struct UpdateBatch;
   size_t applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
                             const VoxelUpdate* begin, const VoxelUpdate* end,
                             const UpdateBatch& batch);
-  void writeNodesRecurs(const EvidentialOcTreeNode* node, std::ostream& s) const;
-  bool readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, std::istream& s);
+  // The data section's bytes with their running CRC-32 (ot_format.cpp).
+  class SectionWriter;
+  class SectionReader;
+  void writeHeader(SectionWriter& out) const;
+  void readHeader(SectionReader& in, uint32_t version);
+  bool writeNodesRecurs(const EvidentialOcTreeNode* node, SectionWriter& out) const;
+  void readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, SectionReader& in);
 
   int num_classes_ = 1;
   std::vector<std::string> class_names_;
@@ -182,6 +214,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   std::vector<uint32_t> free_payloads_; // released slots, reused first
   size_t payload_count_ = 0;            // slots in use
   std::string read_error_;
+  bool created_for_read_ = false;  // made by create(), readData not called yet
 
   // Registers the tree type with AbstractOcTree (the ColorOcTree pattern).
   class StaticMemberInitializer {

@@ -1,6 +1,8 @@
 // Files: atomic .ot / .bt saves, a checked .ot loader, and export to OctoMap's ColorOcTree.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <string>
@@ -12,9 +14,18 @@
 
 namespace evidential_octomap {
 
-// Writes `tree` as .ot (AbstractOcTree format, our type id) to `path`: a temporary file in the
-// same directory is written, flushed and renamed over `path`, so a reader sees the old file or
-// the new one, never a torn one. Throws std::runtime_error naming the path and the reason.
+// Every file the project writes goes through this: `write` fills a temporary file of a unique
+// name beside `path` (`<path>.tmp.<pid>.XXXXXX`, locked while it is written), which is fsynced
+// and renamed over `path`, and the directory is fsynced. A reader sees the old file or the new
+// one, never a torn one; concurrent writers of one path each produce a whole file and the last
+// rename wins; a killed writer leaves its temporary behind, and the next write in the directory
+// removes it (a temporary whose lock is free), never a live writer's. `write` returns false or
+// leaves the stream failed to abort. Throws std::runtime_error naming the path and the reason.
+void writeFileAtomically(const std::string& path, const std::function<bool(std::ostream&)>& write);
+void writeFileAtomically(const std::string& path, const std::string& bytes);
+
+// Writes `tree` as .ot (AbstractOcTree format, our type id) to `path`, atomically. Refuses
+// (std::runtime_error) a tree whose parameters the reader would refuse (parameterProblem()).
 void saveMap(const EvidentialOcTree& tree, const std::string& path);
 
 // Occupancy-only OctoMap binary (.bt), loadable by plain octomap::OcTree; atomic like saveMap.
@@ -23,12 +34,20 @@ void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path);
 // OcTree's, so stock tools must not read or echo our own type id), then writeBinaryData.
 bool writeBinaryOccupancy(const EvidentialOcTree& tree, std::ostream& s);
 
-// Reads an .ot written by saveMap. Throws std::runtime_error for a missing path, a file that is
-// not an OctoMap file, a file of another tree type, or corrupt/truncated data.
-std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path);
+// Reads an .ot written by saveMap: the safe way to load a map. Throws std::runtime_error for a
+// missing path, anything but a regular file (FIFO, device, directory: nothing is read), a file
+// larger than `max_bytes` (0: no limit), a file that is not an OctoMap file, a file of another
+// tree type, or data that is corrupt, truncated or fails its checksum or invariants.
+std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path, uint64_t max_bytes = 0);
 // The same checks on a stream holding .ot bytes (e.g. a map sent between processes); `path`
 // names the source in error messages.
 std::unique_ptr<EvidentialOcTree> loadMap(std::istream& in, const std::string& path);
+
+// OctoMap's generic octomap::AbstractOcTree::read(path) never throws: for a corrupt data
+// section it returns an empty tree (readError() says why), and for a header that says "size 0"
+// it skips our data section (C, names, rule left at defaults). This one call tells: "" when
+// `tree` is a completely read EvidentialOcTree, else why not (also for nullptr and other types).
+std::string readProblem(const octomap::AbstractOcTree* tree);
 
 enum class ColorMode { kClass, kUncertainty };
 

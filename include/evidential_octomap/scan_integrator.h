@@ -23,7 +23,8 @@ class ScanIntegrator {
   // unobserved: optional; receives the evidence the kernel spreads to voxels `tree` has not
   //           observed (which `tree` drops unless kernel_creates_leaves), see
   //           EvidentialOcTree::addEvidence.
-  // Throws std::invalid_argument before touching the map when evidence is malformed.
+  // Throws std::invalid_argument before touching the map when evidence is malformed or the
+  // kernel support exceeds SemanticConfig::kMaxSupportLeaves (supportProblem()).
   InsertStats integrate(const octomap::Pointcloud& points_W, const std::vector<float>& evidence,
                         const octomap::point3d& origin_W, EvidentialOcTree* tree,
                         EvidentialOcTree* unobserved = nullptr) const;

@@ -53,10 +53,33 @@ struct SemanticConfig {
   // Threads for the semantic pass (0 = OpenMP default).
   int threads = 0;
 
+  // Largest kernel support radius, in leaves, that a scan may give any point. A point's kernel
+  // work grows with the cube of its support and a scan's memory with its reach: at this bound
+  // one 123k-point SemanticKITTI scan (u -> 0 everywhere) costs ~45 s CPU and ~3 GB (C = 20,
+  // docs/reliability.md); 680 leaves (l = 5, beta = 10 at 0.2 m) would take hours.
+  static constexpr double kMaxSupportLeaves = 10.0;
+  // Bounds of the values a map may hold (the shared validation below).
+  static constexpr double kMaxDsMultiplier = 1000.0;  // down-sampling cell >= resolution / 1000
+  static constexpr int kMaxThreads = 1024;
+
   // The gamma that is actually used (0 without the adaptive length and under reference_compat).
   double effectiveGamma() const { return reference_compat || !adaptive_length ? 0.0 : gamma; }
   // The down-sampling that is actually used (reference_compat forces "count_cap").
   const std::string& effectiveDownsampling() const;
+  // Largest support length [m] these settings can give a point (u -> 0, or u = 1 when the
+  // effective gamma is negative); an upper bound of what the integrator uses.
+  double maxSupportLength() const;
+
+  // The one validation of these values, shared by the tree's setters, its file reader and writer,
+  // the ROS node's parameters and dynamic_reconfigure, and the CLI: "" when every value is
+  // usable, else the first one that is not, with its allowed range.
+  std::string problem() const;
+  // "" when a scan with these settings is affordable in a map of leaf size `resolution`
+  // (maxSupportLength() <= kMaxSupportLeaves * resolution), else what to change. Checked before
+  // every scan and by the node when a setting changes; not a property of a stored map, whose
+  // resolution and kernel are checked by problem() alone.
+  std::string supportProblem(double resolution) const;
+
   void print(std::ostream& out) const;
 };
 

@@ -1,4 +1,5 @@
 // EvidentialOcTree in ColorOcTree.cpp's order: node part (header only), tree part, static member.
+// The file format (readData / writeData) is in ot_format.cpp.
 #include "evidential_octomap/evidential_octree.h"
 
 #include <algorithm>
@@ -14,38 +15,6 @@
 #include "evidential_octomap/scan_integrator.h"
 
 namespace evidential_octomap {
-namespace {
-
-constexpr uint32_t kFileMagic = 0x4D455645u;  // "EVEM"
-constexpr uint32_t kFileEndMagic = 0x444E4545u;
-constexpr uint32_t kFileVersion = 1;
-constexpr uint32_t kMaxNameLength = 4096;
-
-template <typename T>
-void writePod(std::ostream& s, const T& value) {
-  s.write(reinterpret_cast<const char*>(&value), sizeof(T));
-}
-template <typename T>
-bool readPod(std::istream& s, T& value) {
-  return static_cast<bool>(s.read(reinterpret_cast<char*>(&value), sizeof(T)));
-}
-void writeString(std::ostream& s, const std::string& text) {
-  writePod(s, static_cast<uint32_t>(text.size()));
-  s.write(text.data(), static_cast<std::streamsize>(text.size()));
-}
-bool readString(std::istream& s, std::string& text) {
-  uint32_t length = 0;
-  if (!readPod(s, length) || length > kMaxNameLength) return false;
-  text.resize(length);
-  return static_cast<bool>(s.read(&text[0], length));
-}
-
-// Thrown inside readData only; turned into read_error_ there.
-struct FormatError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-}  // namespace
 
 // --- construction and settings -----------------------------------------------------------------
 
@@ -55,6 +24,13 @@ EvidentialOcTree::EvidentialOcTree(double resolution, int num_classes,
   setNumClasses(num_classes);
   setConfig(config);
   evidential_octree_member_init_.ensureLinking();
+}
+
+EvidentialOcTree* EvidentialOcTree::create() const {
+  // Only AbstractOcTree::read calls create(), and it may skip readData (header "size 0").
+  auto* tree = new EvidentialOcTree(resolution);
+  tree->created_for_read_ = true;
+  return tree;
 }
 
 EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
@@ -105,22 +81,9 @@ void EvidentialOcTree::setClassNames(const std::vector<std::string>& names) {
 }
 
 void EvidentialOcTree::setConfig(const SemanticConfig& config) {
-  auto rule = FusionRule::create(config.rule, config.sbki_prior);  // validates the name
-  if (!(config.length_scale > 0.0) || !(config.beta > 0.0) || !std::isfinite(config.gamma) ||
-      !(config.sigma0 > 0.0) || !(config.drop_percent >= 0.0 && config.drop_percent < 100.0) ||
-      !(config.sbki_prior > 0.0f)) {
-    throw std::invalid_argument(
-        "semantic config out of range: need length_scale, beta, sigma0, sbki_prior > 0, "
-        "finite gamma and drop_percent in [0, 100)");
-  }
-  if (config.downsampling != "average" && config.downsampling != "count_cap") {
-    throw std::invalid_argument("semantic config: downsampling must be 'average' or 'count_cap', got '" +
-                                config.downsampling + "'");
-  }
-  if (config.kernel_distance != "voxel" && config.kernel_distance != "centre") {
-    throw std::invalid_argument("semantic config: kernel_distance must be 'voxel' or 'centre', got '" +
-                                config.kernel_distance + "'");
-  }
+  const std::string problem = config.problem();
+  if (!problem.empty()) throw std::invalid_argument("semantic config: " + problem);
+  auto rule = FusionRule::create(config.rule, config.sbki_prior);
   const bool meaning_changes = config.rule != config_.rule || config.sbki_prior != config_.sbki_prior;
   if (rule_ && meaning_changes && payload_count_ > 0) {
     throw std::logic_error("cannot change the fusion rule of a map that holds semantic evidence ('" +
@@ -128,6 +91,21 @@ void EvidentialOcTree::setConfig(const SemanticConfig& config) {
   }
   config_ = config;
   rule_ = std::move(rule);
+}
+
+SensorModel EvidentialOcTree::sensorModel() const {
+  return {getProbHit(), getProbMiss(), getClampingThresMin(), getClampingThresMax(),
+          getOccupancyThres()};
+}
+
+void EvidentialOcTree::setSensorModel(const SensorModel& model) {
+  const std::string problem = model.problem();
+  if (!problem.empty()) throw std::invalid_argument(problem);
+  setProbHit(model.hit);
+  setProbMiss(model.miss);
+  setClampingThresMin(model.clamp_min);
+  setClampingThresMax(model.clamp_max);
+  setOccupancyThres(model.occupancy_threshold);
 }
 
 // --- integration and queries -----------------------------------------------------------------
@@ -245,7 +223,7 @@ void EvidentialOcTree::updateInnerRecurs(EvidentialOcTreeNode* node, unsigned de
   updateInnerNode(node);
 }
 
-void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node) {
+const EvidentialOcTreeNode* EvidentialOcTree::richestChild(const EvidentialOcTreeNode* node) const {
   const EvidentialOcTreeNode* richest = nullptr;
   double richest_sum = -std::numeric_limits<double>::infinity();
   for (unsigned i = 0; i < 8; ++i) {
@@ -259,6 +237,11 @@ void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node) {
       richest = child;
     }
   }
+  return richest;
+}
+
+void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node) {
+  const EvidentialOcTreeNode* richest = richestChild(node);
   node->updateOccupancyChildren();
   if (richest) {
     float* dst = payloadForUpdate(node);  // may reallocate the pool: read the source after it
@@ -562,158 +545,6 @@ void EvidentialOcTree::clear() {
 size_t EvidentialOcTree::memoryUsage() const {
   return OccupancyOcTreeBase<EvidentialOcTreeNode>::memoryUsage() +
          payloads_.capacity() * sizeof(float) + free_payloads_.capacity() * sizeof(uint32_t);
-}
-
-// --- file format: header, nodes (log-odds, child mask, payload flag, payload), end marker ---
-
-std::ostream& EvidentialOcTree::writeData(std::ostream& s) const {
-  writePod(s, kFileMagic);
-  writePod(s, kFileVersion);
-  writePod(s, static_cast<uint32_t>(num_classes_));
-  for (const auto& name : class_names_) writeString(s, name);
-  writeString(s, config_.rule);
-  for (double v : {config_.length_scale, config_.sigma0, config_.beta, config_.gamma,
-                   config_.drop_percent, config_.ds_multiplier, config_.max_range}) {
-    writePod(s, v);
-  }
-  for (bool flag : {config_.adaptive_length, config_.uncertainty_threshold,
-                    config_.reference_compat, config_.kernel_creates_leaves, config_.discretize}) {
-    writePod(s, static_cast<uint8_t>(flag));
-  }
-  writePod(s, config_.sbki_prior);
-  for (float v : {clamping_thres_min, clamping_thres_max, prob_hit_log, prob_miss_log,
-                  occ_prob_thres_log}) {
-    writePod(s, v);
-  }
-  writePod(s, static_cast<uint64_t>(tree_size));
-  if (root) writeNodesRecurs(root, s);
-  writePod(s, kFileEndMagic);
-  return s;
-}
-
-void EvidentialOcTree::writeNodesRecurs(const EvidentialOcTreeNode* node, std::ostream& s) const {
-  writePod(s, node->getValue());
-  uint8_t children = 0;
-  for (unsigned i = 0; i < 8; ++i) {
-    if (nodeChildExists(node, i)) children |= static_cast<uint8_t>(1u << i);
-  }
-  writePod(s, children);
-  writePod(s, static_cast<uint8_t>(node->hasSemantics()));
-  if (node->hasSemantics()) {
-    s.write(reinterpret_cast<const char*>(slot(node->payload_)),
-            static_cast<std::streamsize>(sizeof(float) * num_classes_));
-  }
-  for (unsigned i = 0; i < 8; ++i) {
-    if (children & (1u << i)) writeNodesRecurs(getNodeChild(node, i), s);
-  }
-}
-
-std::istream& EvidentialOcTree::readData(std::istream& s) {
-  read_error_.clear();
-  try {
-    if (root) throw FormatError("cannot read into a tree that is not empty");
-    uint32_t magic = 0, version = 0, num_classes = 0;
-    if (!readPod(s, magic) || magic != kFileMagic) {
-      throw FormatError("no EvidentialOcTree semantic header (corrupt or foreign data)");
-    }
-    if (!readPod(s, version) || version != kFileVersion) {
-      throw FormatError("unsupported EvidentialOcTree file version " + std::to_string(version));
-    }
-    if (!readPod(s, num_classes) || num_classes < 1 || num_classes > kMaxClasses) {
-      throw FormatError("class count out of range: " + std::to_string(num_classes));
-    }
-    setNumClasses(static_cast<int>(num_classes));
-    std::vector<std::string> names(num_classes);
-    for (auto& name : names) {
-      if (!readString(s, name)) throw FormatError("truncated class names");
-    }
-    SemanticConfig config;
-    if (!readString(s, config.rule)) throw FormatError("truncated rule name");
-    for (double* v : {&config.length_scale, &config.sigma0, &config.beta, &config.gamma,
-                      &config.drop_percent, &config.ds_multiplier, &config.max_range}) {
-      if (!readPod(s, *v)) throw FormatError("truncated parameters");
-    }
-    for (bool* flag : {&config.adaptive_length, &config.uncertainty_threshold,
-                       &config.reference_compat, &config.kernel_creates_leaves,
-                       &config.discretize}) {
-      uint8_t byte = 0;
-      if (!readPod(s, byte) || byte > 1) throw FormatError("bad parameter flag");
-      *flag = byte != 0;
-    }
-    if (!readPod(s, config.sbki_prior)) throw FormatError("truncated parameters");
-    float occupancy[5];
-    for (float& v : occupancy) {
-      if (!readPod(s, v) || !std::isfinite(v)) throw FormatError("bad occupancy parameters");
-    }
-    // Keys are 16 bit: the map spans resolution * 65536, which must be a finite float extent.
-    if (!std::isfinite(resolution) || !(resolution >= 1e-6 && resolution <= 1e6)) {
-      throw FormatError("resolution " + std::to_string(resolution) + " outside [1e-6, 1e6]");
-    }
-    // Bounds that keep the integrator finite and its kernel loop small: support radius <= 64
-    // cells, down-sampling cell >= resolution / 1000, finite sigma0 and max_range.
-    const double max_support = config.length_scale * config.beta *
-                               std::exp(1.0 + std::max(0.0, -config.gamma));
-    if (!std::isfinite(config.sigma0) || !(config.ds_multiplier <= 1000.0) ||
-        std::isnan(config.max_range) || !(max_support <= 64.0 * resolution)) {
-      throw FormatError("semantic parameters out of range (kernel support > 64 cells, "
-                        "ds_multiplier > 1000 or non-finite sigma0/max_range)");
-    }
-    try {
-      setConfig(config);
-    } catch (const std::exception& e) {
-      throw FormatError(std::string("bad semantic parameters: ") + e.what());
-    }
-    setClassNames(names);
-    clamping_thres_min = occupancy[0];
-    clamping_thres_max = occupancy[1];
-    prob_hit_log = occupancy[2];
-    prob_miss_log = occupancy[3];
-    occ_prob_thres_log = occupancy[4];
-    uint64_t expected_nodes = 0;
-    if (!readPod(s, expected_nodes)) throw FormatError("truncated node count");
-    if (expected_nodes > 0) {
-      root = new EvidentialOcTreeNode();
-      tree_size = 1;
-      if (!readNodesRecurs(root, 0, s)) throw FormatError("corrupt or truncated node data");
-    }
-    uint32_t end_magic = 0;
-    if (tree_size != expected_nodes || !readPod(s, end_magic) || end_magic != kFileEndMagic) {
-      throw FormatError("node data does not match its header (corrupt or truncated)");
-    }
-    size_changed = true;
-  } catch (const std::exception& e) {
-    read_error_ = std::string("EvidentialOcTree: ") + e.what();
-    clear();
-    OCTOMAP_ERROR_STR(read_error_);
-    s.setstate(std::ios::failbit);
-  }
-  return s;
-}
-
-bool EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth,
-                                       std::istream& s) {
-  float value = 0.0f;
-  uint8_t children = 0, has_payload = 0;
-  if (!readPod(s, value) || !readPod(s, children) || !readPod(s, has_payload)) return false;
-  if (!std::isfinite(value) || has_payload > 1) return false;
-  if (depth == tree_depth && children != 0) return false;  // deeper than any key
-  node->setValue(value);
-  if (has_payload) {
-    float* data = payloadForUpdate(node);
-    if (!s.read(reinterpret_cast<char*>(data), sizeof(float) * num_classes_)) return false;
-    // Every writer keeps payloads at or above the rule's prior (dempster: L >= 0); anything
-    // else reads out as NaN or negative beliefs.
-    const float prior = rule_->prior();
-    for (int c = 0; c < num_classes_; ++c) {
-      if (!std::isfinite(data[c]) || data[c] < prior) return false;
-    }
-  }
-  for (unsigned i = 0; i < 8; ++i) {
-    if ((children & (1u << i)) && !readNodesRecurs(createNodeChild(node, i), depth + 1, s)) {
-      return false;
-    }
-  }
-  return true;
 }
 
 // --- registration with AbstractOcTree (the ColorOcTree pattern) -----------------------------

@@ -1,7 +1,6 @@
 #include "evidential_octomap/io.h"
 
-#include <signal.h>
-#include <unistd.h>
+#include <sys/stat.h>
 
 #include <cerrno>
 #include <cmath>
@@ -18,63 +17,11 @@
 #include <octomap/AbstractOccupancyOcTree.h>
 
 namespace evidential_octomap {
-namespace {
-
-// Removes `<path>.tmp.<pid>` files left by writers that were killed mid-save (their pid is gone).
-void removeStaleTemporaries(const std::string& path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::path target(path);
-  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-  const std::string prefix = target.filename().string() + ".tmp.";
-  try {  // best effort: the save itself has already succeeded
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (name.compare(0, prefix.size(), prefix) != 0) continue;
-    const std::string pid_text = name.substr(prefix.size());
-    if (pid_text.empty() || pid_text.size() > 9 ||
-        pid_text.find_first_not_of("0123456789") != std::string::npos) {
-      continue;
-    }
-    const long pid = std::stol(pid_text);
-    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) fs::remove(entry.path(), ec);
-  }
-  } catch (const fs::filesystem_error&) {
-  }
-}
-
-// Writes through `write` into a temporary file beside `path`, fsyncs and renames it over `path`.
-void writeAtomically(const std::string& path, const std::function<bool(std::ostream&)>& write) {
-  const std::string temp = path + ".tmp." + std::to_string(::getpid());
-  {
-    std::ofstream out(temp, std::ios::binary | std::ios::trunc);
-    if (!out) {
-      throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
-    }
-    const bool ok = write(out) && out.flush().good();
-    out.close();
-    if (!ok || out.fail()) {
-      std::remove(temp.c_str());
-      throw std::runtime_error("writing " + path + " failed (disk full?)");
-    }
-  }
-  // Make the bytes durable before the rename makes them visible.
-  if (FILE* f = std::fopen(temp.c_str(), "rb")) {
-    ::fsync(fileno(f));
-    std::fclose(f);
-  }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(temp.c_str());
-    throw std::runtime_error("cannot replace " + path + ": " + why);
-  }
-  removeStaleTemporaries(path);
-}
-
-}  // namespace
 
 void saveMap(const EvidentialOcTree& tree, const std::string& path) {
-  writeAtomically(path, [&](std::ostream& s) {
+  const std::string problem = tree.parameterProblem();
+  if (!problem.empty()) throw std::runtime_error("cannot save " + path + ": " + problem);
+  writeFileAtomically(path, [&](std::ostream& s) {
     s << std::setprecision(17);  // AbstractOcTree::write prints `res` with the stream's precision
     return tree.write(s) && s.good();
   });
@@ -99,7 +46,7 @@ bool writeBinaryOccupancy(const EvidentialOcTree& tree, std::ostream& s) {
 }
 
 void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path) {
-  writeAtomically(path, [&](std::ostream& s) { return writeBinaryOccupancy(tree, s); });
+  writeFileAtomically(path, [&](std::ostream& s) { return writeBinaryOccupancy(tree, s); });
 }
 
 namespace {
@@ -114,7 +61,20 @@ struct OtHeader : octomap::AbstractOcTree {
 };
 }  // namespace
 
-std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path) {
+std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path, uint64_t max_bytes) {
+  // Checked before opening: opening a FIFO blocks until a writer appears, and a device such as
+  // /dev/zero never ends.
+  struct stat info;
+  if (::stat(path.c_str(), &info) != 0) {
+    throw std::runtime_error("cannot open " + path + ": " + std::strerror(errno));
+  }
+  if (!S_ISREG(info.st_mode)) {
+    throw std::runtime_error(path + " is not a regular file (a FIFO, device or directory)");
+  }
+  if (max_bytes > 0 && uint64_t(info.st_size) > max_bytes) {
+    throw std::runtime_error(path + " has " + std::to_string(info.st_size) +
+                             " bytes, more than the limit of " + std::to_string(max_bytes));
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open " + path + ": " + std::strerror(errno));
   return loadMap(in, path);
@@ -141,6 +101,18 @@ std::unique_ptr<EvidentialOcTree> loadMap(std::istream& in, const std::string& p
   if (!tree->readError().empty()) throw std::runtime_error(path + ": " + tree->readError());
   if (in.fail()) throw std::runtime_error(path + ": truncated or corrupt data");
   return tree;
+}
+
+std::string readProblem(const octomap::AbstractOcTree* tree) {
+  if (!tree) return "no tree: the file is missing, not an OctoMap file, or of an unknown type";
+  const auto* ours = dynamic_cast<const EvidentialOcTree*>(tree);
+  if (!ours) return "the file holds a " + tree->getTreeType() + ", not an EvidentialOcTree";
+  if (!ours->readError().empty()) return ours->readError();
+  if (ours->dataSectionSkipped()) {
+    return "OctoMap skipped the data section (header says size 0): class names, rule and "
+           "parameters are defaults; read the file with evidential_octomap::loadMap";
+  }
+  return "";
 }
 
 ClassTable::Rgb uncertaintyColor(double t) {

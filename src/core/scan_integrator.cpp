@@ -280,6 +280,10 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   InsertStats stats;
   stats.points_in = n;
   validateInput(points_W, evidence, num_classes);
+  // A kernel the machine cannot afford is refused rather than left to run for hours or to
+  // exhaust memory (SemanticConfig::kMaxSupportLeaves).
+  const std::string support_problem = config_.supportProblem(tree->getResolution());
+  if (!support_problem.empty()) throw std::invalid_argument(support_problem);
   // OctoMap's coordToKeyChecked casts coordinate / resolution to int, which is undefined for
   // NaN, inf and anything beyond the map (points at 1e30): test the extent first.
   const double extent = tree->getResolution() * 32768.0;  // 16-bit keys, tree_max_val

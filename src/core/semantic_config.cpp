@@ -1,6 +1,70 @@
 #include "evidential_octomap/semantic_config.h"
 
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "evidential_octomap/fusion_rule.h"
+
 namespace evidential_octomap {
+namespace {
+
+// "name = value must be <what>" for the first failing check.
+std::string outOfRange(const char* name, double value, const char* what) {
+  std::ostringstream s;
+  s << name << " = " << value << " must be " << what;
+  return s.str();
+}
+
+}  // namespace
+
+double SemanticConfig::maxSupportLength() const {
+  // Uncertainty kernels: l * beta * exp(1 - gamma * u) over u in [0, 1] (gamma 0 without the
+  // adaptive length); S-BKI: l.
+  const double adaptive = length_scale * beta * std::exp(1.0 + std::max(0.0, -effectiveGamma()));
+  return std::max(adaptive, length_scale);
+}
+
+std::string SemanticConfig::problem() const {
+  if (std::find(kFusionRuleNames.begin(), kFusionRuleNames.end(), rule) == kFusionRuleNames.end())
+    return "rule '" + rule + "' is unknown; use dempster, sbki or ebs";
+  // Written so that NaN fails every check.
+  if (!(std::isfinite(length_scale) && length_scale > 0.0))
+    return outOfRange("length_scale", length_scale, "finite and > 0");
+  if (!(std::isfinite(beta) && beta > 0.0)) return outOfRange("beta", beta, "finite and > 0");
+  if (!std::isfinite(gamma)) return outOfRange("gamma", gamma, "finite");
+  if (!(std::isfinite(sigma0) && sigma0 > 0.0))
+    return outOfRange("sigma0", sigma0, "finite and > 0");
+  if (!(drop_percent >= 0.0 && drop_percent < 100.0))
+    return outOfRange("drop_percent", drop_percent, "in [0, 100)");
+  if (!(std::isfinite(sbki_prior) && sbki_prior > 0.0f))
+    return outOfRange("sbki_prior", sbki_prior, "finite and > 0");
+  if (downsampling != "average" && downsampling != "count_cap")
+    return "downsampling '" + downsampling + "' is unknown; use average or count_cap";
+  if (kernel_distance != "voxel" && kernel_distance != "centre")
+    return "kernel_distance '" + kernel_distance + "' is unknown; use voxel or centre";
+  if (!(ds_multiplier <= kMaxDsMultiplier))  // <= 0 (and -inf) switch down-sampling off
+    return outOfRange("ds_multiplier", ds_multiplier, "<= 1000 (<= 0: off)");
+  if (std::isnan(max_range)) return outOfRange("max_range", max_range, "a number (< 0: unlimited)");
+  if (!(threads >= 0 && threads <= kMaxThreads))
+    return outOfRange("threads", threads, "in [0, 1024] (0: OpenMP default)");
+  if (!std::isfinite(maxSupportLength()))
+    return outOfRange("length_scale * beta * exp(1 - gamma * u)", maxSupportLength(), "finite");
+  return "";
+}
+
+std::string SemanticConfig::supportProblem(double resolution) const {
+  const double support = maxSupportLength();
+  const double limit = kMaxSupportLeaves * resolution;
+  if (support <= limit) return "";
+  std::ostringstream s;
+  s << "kernel support up to " << support << " m (length_scale " << length_scale << " * beta "
+    << beta << " * e^(1 - gamma u), u -> " << (effectiveGamma() < 0.0 ? "1" : "0") << ") is "
+    << support / resolution << " leaves at resolution " << resolution << " m; at most "
+    << kMaxSupportLeaves << " leaves (" << limit
+    << " m) are affordable: lower length_scale or beta, or use a coarser resolution";
+  return s.str();
+}
 
 const std::string& SemanticConfig::effectiveDownsampling() const {
   static const std::string count_cap = "count_cap";

@@ -46,9 +46,9 @@ void runExport(const ExportOptions& o) {
     }
     const ColorMode mode = o.mode == "class" ? ColorMode::kClass : ColorMode::kUncertainty;
     const auto color = toColorOcTree(*tree, classes, mode);
-    if (!color->write(o.color_octree)) {
-      throw std::runtime_error(o.color_octree + ": cannot write ColorOcTree");
-    }
+    writeFileAtomically(o.color_octree, [&](std::ostream& out) {
+      return color->write(out) && out.good();  // a killed export leaves the old file whole
+    });
     std::cout << "wrote " << o.color_octree << " (ColorOcTree, " << o.mode << " colours, "
               << color->getNumLeafNodes() << " leaves)\n";
   }

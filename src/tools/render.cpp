@@ -250,13 +250,15 @@ cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& quer
 }
 
 void writePng(const std::string& path, const cv::Mat& image) {
+  std::vector<uchar> png;
   bool ok = false;
   try {
-    ok = cv::imwrite(path, image);
+    ok = cv::imencode(".png", image, png);
   } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": cannot write PNG: " + e.what());
+    throw std::runtime_error(path + ": cannot encode PNG: " + e.what());
   }
-  if (!ok) throw std::runtime_error(path + ": cannot write PNG");
+  if (!ok) throw std::runtime_error(path + ": cannot encode PNG");
+  writeFileAtomically(path, std::string(png.begin(), png.end()));
 }
 
 }  // namespace evidential_octomap::tools

@@ -7,6 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "evidential_octomap/io.h"
+
 namespace evidential_octomap::tools {
 
 namespace {
@@ -255,10 +257,7 @@ std::string toMarkdown(const RunReport& r, const ClassTable& classes) {
 }
 
 void writeText(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error(path + ": cannot open for writing");
-  out << text;
-  if (!out) throw std::runtime_error(path + ": write failed");
+  writeFileAtomically(path, text);
 }
 
 }  // namespace evidential_octomap::tools

@@ -5,6 +5,7 @@
 #include <signal.h>
 #include <sys/mman.h>
 #include <sys/mount.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -107,17 +108,20 @@ std::unique_ptr<EvidentialOcTree> blockMap(int side, int num_classes, unsigned s
   return tree;
 }
 
+// writeFileAtomically's temporaries of `base`: `<base>.evidential-tmp.XXXXXX`.
+bool isTemp(const std::string& file, const std::string& base) {
+  return file.rfind(base + ".evidential-tmp.", 0) == 0;
+}
+
 size_t countTemps(const TempDir& dir, const std::string& base) {
   size_t n = 0;
-  for (const auto& f : dir.files()) {
-    if (f.rfind(base + ".tmp", 0) == 0) ++n;
-  }
+  for (const auto& f : dir.files()) n += isTemp(f, base) ? 1 : 0;
   return n;
 }
 
 void removeTemps(const TempDir& dir, const std::string& base) {
   for (const auto& f : dir.files()) {
-    if (f.rfind(base + ".tmp", 0) == 0) std::remove((dir.path() + "/" + f).c_str());
+    if (isTemp(f, base)) std::remove((dir.path() + "/" + f).c_str());
   }
 }
 
@@ -211,7 +215,8 @@ TEST(CrashSafeSave, KillMinus9DuringSaveLeavesOldOrNewFile) {
             << "/" << trials << " (map A " << saw_a << ", map B " << saw_b << "); " << total_saves
             << " saves completed by the children; killed while a temp file existed in "
             << killed_mid_write << " trials; leftover temp files " << leftover_temps
-            << " (named <path>.tmp.<pid>; the next save of the path removes them)\n";
+            << " (named <path>.evidential-tmp.XXXXXX; the next save in the directory removes "
+               "them)\n";
   RecordProperty("kill_trials", trials);
   RecordProperty("intact", old_or_new);
   RecordProperty("leftover_temps", static_cast<int>(leftover_temps));
@@ -243,12 +248,14 @@ TEST(CrashSafeSave, UnwritablePathGivesClearErrorAndKeepsMap) {
   expectCleanFailure(*tree, "/proc/evidential_map.ot");           // procfs: no new files
   expectCleanFailure(*tree, "/proc/self/status/map.ot");          // a file as directory
   expectCleanFailure(*tree, "");                                  // empty path
-  TempDir dir;
-  expectCleanFailure(*tree, dir.path());  // the path is a directory: rename must fail
-  const std::string temp = dir.path() + ".tmp." + std::to_string(::getpid());
-  EXPECT_NE(::access(temp.c_str(), F_OK), 0) << "temporary file left behind: " << temp;
-  std::remove(temp.c_str());
-  for (const auto& f : dir.files()) ADD_FAILURE() << "left behind: " << f;
+  TempDir parent;
+  const std::string target = parent.path() + "/a_directory";
+  ASSERT_EQ(::mkdir(target.c_str(), 0755), 0);
+  expectCleanFailure(*tree, target);  // the path is a directory: rename must fail
+  for (const auto& f : parent.files()) {
+    if (f != "a_directory") ADD_FAILURE() << "left behind: " << f;
+  }
+  ::rmdir(target.c_str());
 }
 
 TEST(CrashSafeSave, FailedSaveKeepsExistingFile) {
@@ -257,17 +264,22 @@ TEST(CrashSafeSave, FailedSaveKeepsExistingFile) {
   const auto small = blockMap(4, 2, 3);
   saveMap(*small, path);
   const std::string before = readFile(path);
-  // The destination is fine but the temporary file cannot be created: a read-only directory
-  // would do for a normal user; root ignores permissions, so the temp name is blocked with a
-  // directory of that name (saveMap's temp is <path>.tmp.<pid>).
-  const std::string temp = path + ".tmp." + std::to_string(::getpid());
-  ASSERT_EQ(::mkdir(temp.c_str(), 0755), 0);
+  // A write that fails part-way: a file size limit (which root does not bypass) below the new
+  // map's size, with SIGXFSZ ignored so that write() returns EFBIG.
   const auto big = blockMap(10, 2, 4);
+  struct rlimit saved;
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &saved), 0);
+  const auto old_handler = ::signal(SIGXFSZ, SIG_IGN);
+  struct rlimit limit = saved;
+  limit.rlim_cur = before.size() + 1024;
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &limit), 0);
   EXPECT_THROW(saveMap(*big, path), std::runtime_error);
-  ::rmdir(temp.c_str());
+  ::setrlimit(RLIMIT_FSIZE, &saved);
+  ::signal(SIGXFSZ, old_handler);
   EXPECT_EQ(checksum(readFile(path)), checksum(before))
       << "the existing file changed after a failed save";
   EXPECT_NO_THROW(loadMap(path));
+  EXPECT_EQ(countTemps(dir, "map.ot"), 0u) << "a failed save left its temporary behind";
 }
 
 // A tmpfs of 64 KiB: a save that does not fit must fail cleanly and keep the old file.
@@ -305,13 +317,128 @@ TEST(CrashSafeSave, FullDiskGivesClearErrorAndKeepsOldFile) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Concurrent writers (issue 16 item 9): two threads saving one path tore 10 of 10 files when they
+// shared one temporary name.
+
+TEST(ConcurrentSave, ThreadsSavingOnePathNeverTearIt) {
+  TempDir dir;
+  const std::string path = dir.path() + "/map.ot";
+  const auto map_a = blockMap(24, 8, 11);
+  const auto map_b = blockMap(26, 8, 12);
+  const uint64_t sum_a = checksum(serialise(*map_a)), sum_b = checksum(serialise(*map_b));
+  saveMap(*map_a, path);
+  std::atomic<int> failures{0}, loads{0}, bad_loads{0};
+  std::atomic<bool> writing{true};
+  auto writer = [&](const EvidentialOcTree& tree) {
+    for (int i = 0; i < 10; ++i) {
+      try {
+        saveMap(tree, path);
+      } catch (const std::exception&) {
+        ++failures;
+      }
+    }
+  };
+  // A reader loads the path all along: it must always find a whole map.
+  std::thread reader([&] {
+    while (writing) {
+      try {
+        const uint64_t sum = checksum(serialise(*loadMap(path)));
+        if (sum != sum_a && sum != sum_b) ++bad_loads;
+      } catch (const std::exception&) {
+        ++bad_loads;
+      }
+      ++loads;
+    }
+  });
+  std::thread a(writer, std::cref(*map_a)), b(writer, std::cref(*map_b));
+  a.join();
+  b.join();
+  writing = false;
+  reader.join();
+  EXPECT_EQ(failures, 0) << "a save failed";
+  EXPECT_EQ(bad_loads, 0) << "of " << loads << " loads during the saves";
+  const uint64_t final_sum = checksum(serialise(*loadMap(path)));
+  EXPECT_TRUE(final_sum == sum_a || final_sum == sum_b) << "the last file is neither map";
+  EXPECT_EQ(countTemps(dir, "map.ot"), 0u) << "temporaries left after 20 successful saves";
+  std::cout << "[concurrent] 2 threads x 10 saves of one path, " << loads
+            << " loads in between: all whole\n";
+}
+
+// A writer in another process that stops half-way through its file until told to go on.
+struct PausedWriter {
+  pid_t pid = -1;
+  int go_fd = -1;
+};
+PausedWriter startPausedWriter(const std::string& path) {
+  int started[2], go[2];
+  if (::pipe(started) != 0 || ::pipe(go) != 0) throw std::runtime_error("pipe");
+  const pid_t pid = ::fork();
+  if (pid == 0) {  // no OpenMP or tree here: only the writer under test
+    ::close(started[0]);
+    ::close(go[1]);
+    try {
+      writeFileAtomically(path, [&](std::ostream& out) {
+        out << "first half";
+        out.flush();
+        const char note = 1;
+        char wait = 0;
+        if (::write(started[1], &note, 1) != 1 || ::read(go[0], &wait, 1) != 1) ::_exit(5);
+        out << ", second half";
+        return true;
+      });
+    } catch (...) {
+      ::_exit(6);
+    }
+    ::_exit(0);
+  }
+  ::close(started[1]);
+  ::close(go[0]);
+  char note = 0;
+  if (::read(started[0], &note, 1) != 1) throw std::runtime_error("writer did not start");
+  ::close(started[0]);
+  return {pid, go[1]};
+}
+
+TEST(AbandonedTemporaries, AKilledWritersAreRemovedALiveWritersAreNot) {
+  TempDir dir;
+  const std::string other = dir.path() + "/other.ot";
+  const auto map = blockMap(4, 2, 3);
+
+  // A live writer of another file in the directory: its temporary survives our save.
+  PausedWriter live = startPausedWriter(other);
+  ASSERT_EQ(countTemps(dir, "other.ot"), 1u);
+  saveMap(*map, dir.path() + "/map.ot");
+  EXPECT_EQ(countTemps(dir, "other.ot"), 1u) << "a live writer's temporary was removed";
+  const char go = 1;
+  ASSERT_EQ(::write(live.go_fd, &go, 1), 1);
+  int status = 0;
+  ASSERT_EQ(::waitpid(live.pid, &status, 0), live.pid);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the live writer failed";
+  EXPECT_EQ(readFile(other), "first half, second half");
+  ::close(live.go_fd);
+
+  // A writer killed half-way: its temporary goes with the next save in the directory, and the
+  // file it was replacing is untouched.
+  PausedWriter killed = startPausedWriter(other);
+  ASSERT_EQ(::kill(killed.pid, SIGKILL), 0);
+  ASSERT_EQ(::waitpid(killed.pid, &status, 0), killed.pid);
+  ::close(killed.go_fd);
+  ASSERT_EQ(countTemps(dir, "other.ot"), 1u);
+  saveMap(*map, dir.path() + "/map.ot");
+  EXPECT_EQ(countTemps(dir, "other.ot"), 0u) << "a killed writer's temporary stayed";
+  EXPECT_EQ(readFile(other), "first half, second half");
+}
+
+// ---------------------------------------------------------------------------------------------
 // saveMap -> loadMap must be exact (DESIGN §4: bit-exact round trip).
 
 TEST(SaveLoad, RoundTripIsExactForAnyResolution) {
   TempDir dir;
   const std::string path = dir.path() + "/res.ot";
   for (double res : {0.2, 0.05, 0.123456789, 1.0 / 3.0}) {
-    EvidentialOcTree tree(res, 2);
+    SemanticConfig config;
+    config.length_scale = 1.5 * res;  // a kernel of a few leaves at every resolution
+    EvidentialOcTree tree(res, 2, config);
     octomap::Pointcloud points;
     points.push_back(1.0f, 0.5f, 0.2f);
     tree.insertSemanticScan(points, {3.0f, 1.0f}, octomap::point3d(0.f, 0.f, 0.f));

@@ -2,10 +2,17 @@
 // independent computation of the metrics in this file (own file parsing, own pose, own loops).
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <Eigen/LU>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <random>
+#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -241,6 +248,51 @@ TEST_F(CliEndToEnd, ExportAndMergeWriteReadableMaps) {
   r = run("info " + out_ + "/merged.ot");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("EvidentialOcTree"), std::string::npos);
+}
+
+// kill -9 during `export --color-octree` (issue 16 item 9: 41 of 50 kills destroyed the previous
+// file when the export wrote it in place). The previous export must stay whole.
+TEST_F(CliEndToEnd, ExportKilledAtAnyMomentLeavesTheOldFileWhole) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  const std::string color = out_ + "/killed_color.ot";
+  const std::string args_map = out_ + "/map/map.ot";
+  const std::string classes = kittiClasses();
+  auto exportArgs = [&] {
+    return std::vector<std::string>{EVIDENTIAL_TEST_CLI, "export", "--map", args_map,
+                                    "--classes", classes, "--color-octree", color};
+  };
+  const auto t0 = std::chrono::steady_clock::now();
+  Result first = run("export --map " + args_map + " --classes " + classes + " --color-octree " +
+                     color);
+  ASSERT_EQ(first.status, 0) << first.output;
+  const double export_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::ifstream in(color, std::ios::binary);
+  const std::string before((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::mt19937 rng(16);
+  std::uniform_real_distribution<double> delay(0.0, 1.2 * export_ms);
+  for (int trial = 0; trial < 8; ++trial) {
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      std::vector<std::string> args = exportArgs();
+      std::vector<char*> argv;
+      for (auto& a : args) argv.push_back(&a[0]);
+      argv.push_back(nullptr);
+      ::execv(argv[0], argv.data());
+      ::_exit(127);
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay(rng)));
+    ::kill(pid, SIGKILL);
+    ASSERT_EQ(::waitpid(pid, nullptr, 0), pid);
+    std::ifstream after_in(color, std::ios::binary);
+    const std::string after((std::istreambuf_iterator<char>(after_in)),
+                            std::istreambuf_iterator<char>());
+    ASSERT_TRUE(after == before) << "trial " << trial << ": the ColorOcTree file is torn ("
+                                 << after.size() << " of " << before.size() << " B)";
+  }
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(color));
+  EXPECT_NE(dynamic_cast<octomap::ColorOcTree*>(read.get()), nullptr);
 }
 
 TEST(CliErrors, MissingDataDirectoryFails) {

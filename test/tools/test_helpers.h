@@ -1,6 +1,9 @@
 // Shared by the tool tests: paths (CMake-defined) and temporary directories.
 #pragma once
 
+#include <unistd.h>
+
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -18,11 +21,21 @@ inline std::string rellisClasses() {
   return std::string(EVIDENTIAL_TEST_CONFIG_DIR) + "/classes_rellis3d.yaml";
 }
 
-// A fresh directory under the build tree, removed first if it exists.
+// A fresh directory under the build tree, of this process only (`<name>.<pid>`: ctest -j runs
+// every test in its own process, several at once), removed when the process exits.
 inline std::string freshDir(const std::string& name) {
-  const std::filesystem::path p = std::filesystem::path(EVIDENTIAL_TEST_TMP_DIR) / name;
+  static std::vector<std::filesystem::path> made;
+  if (made.empty()) {
+    std::atexit([] {
+      std::error_code ec;
+      for (const auto& p : made) std::filesystem::remove_all(p, ec);
+    });
+  }
+  const std::filesystem::path p = std::filesystem::path(EVIDENTIAL_TEST_TMP_DIR) /
+                                  (name + "." + std::to_string(::getpid()));
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
+  made.push_back(p);
   return p.string();
 }
 

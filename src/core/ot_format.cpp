@@ -1,0 +1,322 @@
+// The data section of an EvidentialOcTree .ot file (what AbstractOcTree::write puts after OctoMap's
+// text header "id / size / res / data"). Little-endian, format 2:
+//
+//   u32 magic "EVEM", u32 format, f64 resolution (2+), u32 C, C x string class name,
+//   string rule, string downsampling (2+), string kernel_distance (2+), 7 x f64 (length_scale sigma0 beta gamma drop_percent ds_multiplier max_range),
+//   5 x u8 flags, f32 sbki_prior, 5 x f32 occupancy log-odds (clamp min, clamp max, hit, miss,
+//   threshold), u64 node count, nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of
+//   every byte from the magic to the end magic.
+//   node: f32 log-odds, u8 child mask, u8 has-payload, [C x f32 payload]
+//   string: u32 length (<= 4096), bytes
+//
+// Format 1 (before the CRC) has no resolution field and no CRC; it is still read. OctoMap's own
+// header prints `res` with the stream's precision (6 digits unless the writer sets more), so
+// format 2 keeps the exact resolution in the section and the reader restores it.
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "crc32.h"
+#include "evidential_octomap/evidential_octree.h"
+
+namespace evidential_octomap {
+namespace {
+
+constexpr uint32_t kFileMagic = 0x4D455645u;  // "EVEM"
+constexpr uint32_t kFileEndMagic = 0x444E4545u;
+constexpr uint32_t kFormatWithoutCrc = 1;
+constexpr uint32_t kFormat = 2;
+constexpr uint32_t kMaxNameLength = 4096;
+
+// Thrown inside readData only; turned into read_error_ there.
+struct FormatError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The shared validation of everything a file stores besides nodes. `occupancy` holds the
+// log-odds in file order: clamp min, clamp max, hit, miss, occupancy threshold.
+std::string storedParameterProblem(double resolution, const float (&occupancy)[5],
+                                   const SemanticConfig& config) {
+  if (!(resolution >= EvidentialOcTree::kMinResolution &&
+        resolution <= EvidentialOcTree::kMaxResolution)) {
+    return "resolution " + std::to_string(resolution) + " outside [1e-6, 1e6]";
+  }
+  const std::string problem = SensorModel::problemOfLogOdds(
+      occupancy[2], occupancy[3], occupancy[0], occupancy[1], occupancy[4]);
+  return problem.empty() ? config.problem() : problem;
+}
+
+}  // namespace
+
+class EvidentialOcTree::SectionWriter {
+ public:
+  explicit SectionWriter(std::ostream& s) : s_(s) {}
+  void bytes(const void* data, size_t size) {
+    s_.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+    crc_ = crc32Update(crc_, data, size);
+  }
+  template <typename T>
+  void pod(const T& value) {
+    bytes(&value, sizeof(T));
+  }
+  void string(const std::string& text) {
+    pod(static_cast<uint32_t>(text.size()));
+    bytes(text.data(), text.size());
+  }
+  uint32_t crc() const { return crc_; }
+
+ private:
+  std::ostream& s_;
+  uint32_t crc_ = 0;
+};
+
+class EvidentialOcTree::SectionReader {
+ public:
+  explicit SectionReader(std::istream& s) : s_(s) {}
+  void bytes(void* data, size_t size, const char* what) {
+    if (!s_.read(static_cast<char*>(data), static_cast<std::streamsize>(size))) {
+      throw FormatError(std::string("truncated ") + what);
+    }
+    crc_ = crc32Update(crc_, data, size);
+  }
+  template <typename T>
+  T pod(const char* what) {
+    T value;
+    bytes(&value, sizeof(T), what);
+    return value;
+  }
+  std::string string(const char* what) {
+    const uint32_t length = pod<uint32_t>(what);
+    if (length > kMaxNameLength) throw FormatError(std::string(what) + " longer than 4096 bytes");
+    std::string text(length, '\0');
+    bytes(&text[0], length, what);
+    return text;
+  }
+  uint32_t crc() const { return crc_; }
+  std::istream& stream() { return s_; }
+
+ private:
+  std::istream& s_;
+  uint32_t crc_ = 0;
+};
+
+std::string EvidentialOcTree::parameterProblem() const {
+  const float occupancy[5] = {clamping_thres_min, clamping_thres_max, prob_hit_log, prob_miss_log,
+                              occ_prob_thres_log};
+  return storedParameterProblem(resolution, occupancy, config_);
+}
+
+std::string EvidentialOcTree::innerNodeProblem(const EvidentialOcTreeNode* node) const {
+  if (node->getLogOdds() != node->getMaxChildLogOdds()) {
+    return "an inner node's log-odds " + std::to_string(node->getLogOdds()) +
+           " are not its children's maximum " + std::to_string(node->getMaxChildLogOdds());
+  }
+  const EvidentialOcTreeNode* richest = richestChild(node);
+  if (!richest) {
+    return node->hasSemantics() ? "an inner node holds evidence none of its children holds" : "";
+  }
+  if (!node->hasSemantics() ||
+      !std::equal(slot(node->payload_), slot(node->payload_) + num_classes_,
+                  slot(richest->payload_))) {
+    return "an inner node's evidence is not its richest child's";
+  }
+  return "";
+}
+
+// --- writing ---------------------------------------------------------------------------------
+
+std::ostream& EvidentialOcTree::writeData(std::ostream& s) const {
+  // A map whose parameters the reader would refuse is not written at all.
+  const std::string problem = parameterProblem();
+  if (!problem.empty()) {
+    OCTOMAP_ERROR_STR("EvidentialOcTree: not written: " << problem);
+    s.setstate(std::ios::failbit);
+    return s;
+  }
+  SectionWriter out(s);
+  writeHeader(out);
+  out.pod(static_cast<uint64_t>(tree_size));
+  if (root && !writeNodesRecurs(root, out)) {
+    OCTOMAP_ERROR_STR(
+        "EvidentialOcTree: not written: inner nodes are stale (call "
+        "updateInnerNodes() after lazy_eval updates or deleteNode)");
+    s.setstate(std::ios::failbit);
+    return s;
+  }
+  out.pod(kFileEndMagic);
+  const uint32_t crc = out.crc();
+  s.write(reinterpret_cast<const char*>(&crc), sizeof(crc));
+  return s;
+}
+
+void EvidentialOcTree::writeHeader(SectionWriter& out) const {
+  out.pod(kFileMagic);
+  out.pod(kFormat);
+  out.pod(resolution);
+  out.pod(static_cast<uint32_t>(num_classes_));
+  for (const auto& name : class_names_) out.string(name);
+  out.string(config_.rule);
+  out.string(config_.downsampling);
+  out.string(config_.kernel_distance);
+  for (double v : {config_.length_scale, config_.sigma0, config_.beta, config_.gamma,
+                   config_.drop_percent, config_.ds_multiplier, config_.max_range}) {
+    out.pod(v);
+  }
+  for (bool flag : {config_.adaptive_length, config_.uncertainty_threshold,
+                    config_.reference_compat, config_.kernel_creates_leaves, config_.discretize}) {
+    out.pod(static_cast<uint8_t>(flag));
+  }
+  out.pod(config_.sbki_prior);
+  for (float v : {clamping_thres_min, clamping_thres_max, prob_hit_log, prob_miss_log,
+                  occ_prob_thres_log}) {  // the order storedParameterProblem() reads
+    out.pod(v);
+  }
+}
+
+// Returns false (and stops) at the first inner node that disagrees with its children: the reader
+// would refuse the file.
+bool EvidentialOcTree::writeNodesRecurs(const EvidentialOcTreeNode* node,
+                                        SectionWriter& out) const {
+  uint8_t children = 0;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (nodeChildExists(node, i)) children |= static_cast<uint8_t>(1u << i);
+  }
+  if (children != 0 && !innerNodeProblem(node).empty()) return false;
+  out.pod(node->getValue());
+  out.pod(children);
+  out.pod(static_cast<uint8_t>(node->hasSemantics()));
+  if (node->hasSemantics()) out.bytes(slot(node->payload_), sizeof(float) * num_classes_);
+  for (unsigned i = 0; i < 8; ++i) {
+    if ((children & (1u << i)) && !writeNodesRecurs(getNodeChild(node, i), out)) return false;
+  }
+  return true;
+}
+
+// --- reading ---------------------------------------------------------------------------------
+
+std::istream& EvidentialOcTree::readData(std::istream& s) {
+  read_error_.clear();
+  created_for_read_ = false;
+  try {
+    if (root) throw FormatError("cannot read into a tree that is not empty");
+    SectionReader in(s);
+    if (in.pod<uint32_t>("semantic header") != kFileMagic) {
+      throw FormatError("no EvidentialOcTree semantic header (corrupt or foreign data)");
+    }
+    const uint32_t version = in.pod<uint32_t>("semantic header");
+    if (version != kFormat && version != kFormatWithoutCrc) {
+      throw FormatError("unsupported EvidentialOcTree file format " + std::to_string(version) +
+                        " (this library reads formats 1 and 2)");
+    }
+    readHeader(in, version);
+    const uint64_t expected_nodes = in.pod<uint64_t>("node count");
+    if (expected_nodes > 0) {
+      root = new EvidentialOcTreeNode();
+      tree_size = 1;
+      readNodesRecurs(root, 0, in);
+    }
+    if (tree_size != expected_nodes || in.pod<uint32_t>("end marker") != kFileEndMagic) {
+      throw FormatError("node data does not match its header (corrupt or truncated)");
+    }
+    if (version >= kFormat) {
+      const uint32_t computed = in.crc();
+      uint32_t stored = 0;
+      if (!s.read(reinterpret_cast<char*>(&stored), sizeof(stored))) {
+        throw FormatError("truncated checksum");
+      }
+      if (stored != computed) throw FormatError("checksum mismatch (corrupt file)");
+    }
+    size_changed = true;
+  } catch (const std::exception& e) {
+    read_error_ = std::string("EvidentialOcTree: ") + e.what();
+    clear();
+    OCTOMAP_ERROR_STR(read_error_);
+    s.setstate(std::ios::failbit);
+  }
+  return s;
+}
+
+void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
+  if (version >= kFormat) {
+    // OctoMap's text header may have rounded `res`; the section has it exactly. Anything more
+    // than rounding apart means one of them is corrupt.
+    const double exact = in.pod<double>("resolution");
+    if (!(std::fabs(exact - resolution) <= 1e-5 * std::fabs(exact))) {
+      throw FormatError("resolution " + std::to_string(resolution) +
+                        " of the OctoMap header disagrees with the section's " +
+                        std::to_string(exact));
+    }
+    setResolution(exact);
+  }
+  const uint32_t num_classes = in.pod<uint32_t>("class count");
+  if (num_classes < 1 || num_classes > kMaxClasses) {
+    throw FormatError("class count out of range: " + std::to_string(num_classes));
+  }
+  setNumClasses(static_cast<int>(num_classes));
+  std::vector<std::string> names(num_classes);
+  for (auto& name : names) name = in.string("class names");
+  SemanticConfig config;
+  config.rule = in.string("rule name");
+  if (version >= kFormat) {  // format 1 predates them: their defaults
+    config.downsampling = in.string("downsampling");
+    config.kernel_distance = in.string("kernel distance");
+  }
+  for (double* v : {&config.length_scale, &config.sigma0, &config.beta, &config.gamma,
+                    &config.drop_percent, &config.ds_multiplier, &config.max_range}) {
+    *v = in.pod<double>("parameters");
+  }
+  for (bool* flag : {&config.adaptive_length, &config.uncertainty_threshold,
+                     &config.reference_compat, &config.kernel_creates_leaves, &config.discretize}) {
+    const uint8_t byte = in.pod<uint8_t>("parameters");
+    if (byte > 1) throw FormatError("bad parameter flag");
+    *flag = byte != 0;
+  }
+  config.sbki_prior = in.pod<float>("parameters");
+  float occupancy[5];
+  for (float& v : occupancy) v = in.pod<float>("occupancy parameters");
+  const std::string problem = storedParameterProblem(resolution, occupancy, config);
+  if (!problem.empty()) throw FormatError("bad parameters: " + problem);
+  setConfig(config);
+  setClassNames(names);
+  clamping_thres_min = occupancy[0];
+  clamping_thres_max = occupancy[1];
+  prob_hit_log = occupancy[2];
+  prob_miss_log = occupancy[3];
+  occ_prob_thres_log = occupancy[4];
+}
+
+void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth,
+                                       SectionReader& in) {
+  const float value = in.pod<float>("node data");
+  const uint8_t children = in.pod<uint8_t>("node data");
+  const uint8_t has_payload = in.pod<uint8_t>("node data");
+  if (!std::isfinite(value)) throw FormatError("a node's log-odds are not finite");
+  if (has_payload > 1) throw FormatError("bad payload flag (corrupt node data)");
+  if (depth == tree_depth && children != 0) {
+    throw FormatError("a node lies deeper than the tree (corrupt node data)");
+  }
+  node->setValue(value);
+  if (has_payload) {
+    float* data = payloadForUpdate(node);
+    in.bytes(data, sizeof(float) * num_classes_, "node data");
+    // Every writer keeps payloads at or above the rule's prior (dempster: L >= 0); anything
+    // else reads out as NaN or negative beliefs.
+    const float prior = rule_->prior();
+    for (int c = 0; c < num_classes_; ++c) {
+      if (!std::isfinite(data[c]) || data[c] < prior) {
+        throw FormatError("a payload is not finite or below the rule's prior");
+      }
+    }
+  }
+  for (unsigned i = 0; i < 8; ++i) {
+    if (children & (1u << i)) readNodesRecurs(createNodeChild(node, i), depth + 1, in);
+  }
+  if (children != 0) {
+    const std::string problem = innerNodeProblem(node);
+    if (!problem.empty()) throw FormatError(problem + " (corrupt node data)");
+  }
+}
+
+}  // namespace evidential_octomap

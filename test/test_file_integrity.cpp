@@ -1,0 +1,348 @@
+// Integrity of .ot files (issue 16 item 10): a CRC-32 over the semantic section and invariant
+// checks after reading, so an altered file never loads as a different map; format-1 files (no
+// CRC) still load; loadMap reads regular files only; readProblem() tells in one call whether
+// OctoMap's generic reader gave a complete map.
+#include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <iterator>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "../src/core/crc32.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/io.h"
+#include "tree_compare.h"
+
+namespace evidential_octomap {
+namespace {
+
+using test::compareTrees;
+
+// Files of this process only (ctest -j runs several test binaries at once), in /dev/shm when
+// there is one: thousands of files are rewritten here, which a disk makes slow.
+class Scratch {
+ public:
+  Scratch() {
+    const std::string base = ::access("/dev/shm", W_OK) == 0 ? "/dev/shm/" : ::testing::TempDir();
+    std::string pattern = base + "evidential_integrity_XXXXXX";
+    dir_ = ::mkdtemp(&pattern[0]);
+  }
+  ~Scratch() { std::system(("rm -rf '" + dir_ + "'").c_str()); }
+  std::string file(const std::string& name) const { return dir_ + "/" + name; }
+
+ private:
+  std::string dir_;
+};
+
+std::string readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+void writeBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream(path, std::ios::binary | std::ios::trunc)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+std::unique_ptr<EvidentialOcTree> smallMap() {
+  auto tree = std::make_unique<EvidentialOcTree>(0.2, 3);
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  for (int i = 0; i < 5; ++i) {
+    points.push_back(1.1f, -0.4f + 0.2f * i, 0.1f);
+    evidence.insert(evidence.end(), {float(i), 2.0f, 0.5f});
+  }
+  tree->insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.5f));
+  return tree;
+}
+
+// Where the data section (after OctoMap's "data\n" line) starts.
+size_t sectionStart(const std::string& bytes) {
+  const size_t at = bytes.find("\ndata\n");
+  return at == std::string::npos ? std::string::npos : at + 6;
+}
+
+// The layout of format 2 as documented in ot_format.cpp, used to edit files by hand.
+constexpr size_t kVersionOffset = 4;     // after the magic
+constexpr size_t kResolutionOffset = 8;  // format 2 only
+
+// The same map as format 1 wrote it: no resolution field, no CRC.
+std::string toFormat1(const std::string& bytes) {
+  const size_t s = sectionStart(bytes);
+  std::string old = bytes.substr(0, s + kResolutionOffset) +
+                    bytes.substr(s + kResolutionOffset + 8, bytes.size() - 4 - (s + 16));
+  const uint32_t one = 1;
+  std::memcpy(&old[s + kVersionOffset], &one, 4);
+  return old;
+}
+
+// Recomputes the trailing CRC of a format-2 file (an edit that a CRC alone would not catch).
+void reseal(std::string* bytes) {
+  const size_t s = sectionStart(*bytes);
+  const uint32_t crc = crc32Update(0, bytes->data() + s, bytes->size() - 4 - s);
+  std::memcpy(&(*bytes)[bytes->size() - 4], &crc, 4);
+}
+
+// Offset of the root node: after the node count, whose value is the tree's size.
+size_t rootOffset(const std::string& bytes, uint64_t size) {
+  std::string pattern(8, '\0');
+  std::memcpy(&pattern[0], &size, 8);
+  return bytes.find(pattern, sectionStart(bytes)) + 8;
+}
+
+TEST(Crc32, MatchesTheStandardCheckValue) {
+  EXPECT_EQ(crc32Update(0, "123456789", 9), 0xCBF43926u);
+  // Incremental and one-shot agree, at every split.
+  const std::string text = "The quick brown fox jumps over the lazy dog";
+  const uint32_t whole = crc32Update(0, text.data(), text.size());
+  EXPECT_EQ(whole, 0x414FA339u);
+  for (size_t split = 0; split <= text.size(); ++split) {
+    EXPECT_EQ(
+        crc32Update(crc32Update(0, text.data(), split), text.data() + split, text.size() - split),
+        whole);
+  }
+}
+
+// Every single-byte alteration of a saved map: refused, or (where the byte does not matter,
+// e.g. OctoMap's comment lines) the very same map. Before the CRC, ~6 % of altered files loaded
+// as a different map.
+TEST(Integrity, NoAlteredFileLoadsAsADifferentMap) {
+  Scratch scratch;
+  const auto tree = smallMap();
+  const std::string good = scratch.file("good.ot");
+  saveMap(*tree, good);
+  const std::string bytes = readBytes(good);
+  const std::string altered = scratch.file("altered.ot");
+  size_t refused = 0, same = 0, different = 0;
+  std::string first_different;
+  for (size_t at = 0; at < bytes.size(); ++at) {
+    for (uint8_t mask : {0x01, 0x10, 0x80, 0xFF}) {
+      std::string bad = bytes;
+      bad[at] = static_cast<char>(bad[at] ^ mask);
+      writeBytes(altered, bad);
+      std::unique_ptr<EvidentialOcTree> loaded;
+      try {
+        loaded = loadMap(altered);
+      } catch (const std::runtime_error&) {
+        ++refused;
+        continue;
+      }
+      if (compareTrees(*tree, *loaded)) {
+        ++same;
+      } else if (++different == 1) {
+        first_different = "byte " + std::to_string(at) + " ^ " + std::to_string(mask);
+      }
+    }
+  }
+  EXPECT_EQ(different, 0u) << different
+                           << " altered files loaded as a different map (first: " << first_different
+                           << ")";
+  EXPECT_GT(refused, 4 * (bytes.size() - sectionStart(bytes)) - 1);
+  RecordProperty("refused", std::to_string(refused));
+  RecordProperty("same", std::to_string(same));
+}
+
+TEST(Integrity, Format1FilesWithoutChecksumStillLoad) {
+  Scratch scratch;
+  const auto tree = smallMap();
+  std::ostringstream out;
+  out << std::setprecision(17);
+  tree->write(out);
+  const std::string path = scratch.file("format1.ot");
+  writeBytes(path, toFormat1(out.str()));
+  std::unique_ptr<EvidentialOcTree> loaded;
+  ASSERT_NO_THROW(loaded = loadMap(path));
+  EXPECT_TRUE(compareTrees(*tree, *loaded));
+  // And through OctoMap's generic reader.
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
+  EXPECT_EQ(readProblem(any.get()), "");
+}
+
+// An inner node that disagrees with its children: refused in a format-1 file (no CRC) and in a
+// format-2 file whose CRC was recomputed after the edit.
+TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
+  Scratch scratch;
+  const auto tree = smallMap();
+  std::ostringstream out;
+  out << std::setprecision(17);
+  tree->write(out);
+  const std::string v2 = out.str();
+  const size_t root = rootOffset(v2, tree->size());
+  float root_value;
+  std::memcpy(&root_value, &v2[root], 4);
+  ASSERT_EQ(root_value, tree->getRoot()->getValue()) << "root offset not found";
+  for (const char* what : {"log-odds", "evidence"}) {
+    std::string edited = v2;
+    if (std::string(what) == "log-odds") {
+      const float other = root_value + 0.5f;
+      std::memcpy(&edited[root], &other, 4);
+    } else {  // the root's first payload entry (after value, child mask and payload flag)
+      ASSERT_TRUE(tree->getRoot()->hasSemantics());
+      float first;
+      std::memcpy(&first, &edited[root + 6], 4);
+      first += 1.0f;
+      std::memcpy(&edited[root + 6], &first, 4);
+    }
+    reseal(&edited);
+    for (const std::string& file : {edited, toFormat1(edited)}) {
+      const std::string path = scratch.file("inner.ot");
+      writeBytes(path, file);
+      try {
+        loadMap(path);
+        ADD_FAILURE() << what << ": an inconsistent inner node was loaded";
+      } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("inner node"), std::string::npos) << e.what();
+      }
+    }
+  }
+}
+
+// OctoMap's header `res` and the section's exact resolution: rounding (6 digits, what a plain
+// tree.write(path) prints) is restored exactly; anything else is corruption.
+TEST(Integrity, HeaderResolutionIsCheckedAgainstTheSection) {
+  Scratch scratch;
+  SemanticConfig config;
+  config.length_scale = 0.4;
+  EvidentialOcTree tree(0.123456789, 2, config);
+  octomap::Pointcloud points;
+  points.push_back(1.0f, 0.5f, 0.2f);
+  tree.insertSemanticScan(points, {3.0f, 1.0f}, octomap::point3d(0.f, 0.f, 0.f));
+  const std::string path = scratch.file("res.ot");
+  ASSERT_TRUE(tree.write(path));  // OctoMap's writer: `res 0.123457`
+  ASSERT_NE(readBytes(path).find("res 0.123457\n"), std::string::npos);
+  EXPECT_EQ(loadMap(path)->getResolution(), 0.123456789);
+  std::string bytes = readBytes(path);
+  bytes.replace(bytes.find("res 0.123457\n"), 13, "res 0.223457\n");
+  writeBytes(path, bytes);
+  EXPECT_THROW(loadMap(path), std::runtime_error);
+}
+
+TEST(ReadProblem, TellsEveryWayTheGenericReaderCanFall) {
+  Scratch scratch;
+  EXPECT_NE(readProblem(nullptr), "");
+  const auto tree = smallMap();
+  const std::string good = scratch.file("good.ot");
+  saveMap(*tree, good);
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(good));
+  EXPECT_EQ(readProblem(read.get()), "");
+
+  // A corrupt data section: OctoMap returns an empty tree of our type.
+  std::string bytes = readBytes(good);
+  bytes[bytes.size() - 10] ^= 0x55;
+  const std::string corrupt = scratch.file("corrupt.ot");
+  writeBytes(corrupt, bytes);
+  read.reset(octomap::AbstractOcTree::read(corrupt));
+  ASSERT_NE(read, nullptr);
+  EXPECT_EQ(read->size(), 0u);
+  const auto* ours = dynamic_cast<const EvidentialOcTree*>(read.get());
+  ASSERT_NE(ours, nullptr);
+  EXPECT_NE(readProblem(read.get()), "");
+  EXPECT_EQ(readProblem(read.get()), ours->readError());
+
+  // An empty map: the header says "size 0", OctoMap never reads our section.
+  EvidentialOcTree empty(0.2, 7);
+  const std::string empty_path = scratch.file("empty.ot");
+  saveMap(empty, empty_path);
+  read.reset(octomap::AbstractOcTree::read(empty_path));
+  ASSERT_NE(read, nullptr);
+  EXPECT_NE(readProblem(read.get()).find("loadMap"), std::string::npos);
+  EXPECT_EQ(loadMap(empty_path)->numClasses(), 7);
+
+  // Another tree type.
+  octomap::OcTree plain(0.2);
+  plain.updateNode(octomap::point3d(1, 1, 1), true);
+  const std::string plain_path = scratch.file("plain.ot");
+  plain.write(plain_path);
+  read.reset(octomap::AbstractOcTree::read(plain_path));
+  EXPECT_NE(readProblem(read.get()).find("OcTree"), std::string::npos);
+}
+
+// Stale inner nodes (OctoMap's deleteNode does not refresh our inner summaries) are not
+// written, because the reader would refuse them; updateInnerNodes() makes the map savable.
+TEST(Integrity, StaleInnerNodesAreNotWritten) {
+  Scratch scratch;
+  auto tree = smallMap();
+  // Delete the leaf the root summarises (the richest), leaving its siblings.
+  const EvidentialOcTreeNode* richest = nullptr;
+  octomap::OcTreeKey richest_key;
+  double best = -1.0;
+  for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
+    if (!it->hasSemantics() || it.getDepth() != tree->getTreeDepth()) continue;
+    const float* p = tree->payload(&*it);
+    const double sum = double(p[0]) + p[1] + p[2];
+    if (sum > best) {
+      best = sum;
+      richest = &*it;
+      richest_key = it.getKey();
+    }
+  }
+  ASSERT_NE(richest, nullptr);
+  const EvidentialOcTreeNode* parent = tree->search(richest_key, tree->getTreeDepth() - 1);
+  unsigned siblings = 0;
+  for (unsigned i = 0; i < 8; ++i) siblings += tree->nodeChildExists(parent, i) ? 1 : 0;
+  ASSERT_GE(siblings, 2u) << "OctoMap 1.9 cannot delete an only child";
+  tree->deleteNode(richest_key);
+  const std::string path = scratch.file("stale.ot");
+  EXPECT_THROW(saveMap(*tree, path), std::runtime_error);
+  tree->updateInnerNodes();
+  tree->compactPayloads();  // deleteNode leaves the deleted leaf's payload slot in the pool
+  ASSERT_NO_THROW(saveMap(*tree, path));
+  EXPECT_TRUE(compareTrees(*tree, *loadMap(path)));
+}
+
+// --- loadMap on what is not a regular file (issue 16 item 6) ---------------------------------
+
+// Runs loadMap(path) in a child with a 20 s alarm: a hang guard (opening a FIFO blocks until a
+// writer appears), not a timing assertion. Returns the child's exit status: 0 loaded, 1 threw
+// std::runtime_error, anything else a hang or crash. (Only for paths refused before a tree is
+// made: after fork, OpenMP in a child of a process that used it can deadlock.)
+int loadInChild(const std::string& path) {
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::alarm(20);
+    try {
+      loadMap(path);
+      ::_exit(0);
+    } catch (const std::runtime_error& e) {
+      ::_exit(std::string(e.what()).find(path) != std::string::npos ? 1 : 3);
+    } catch (...) {
+      ::_exit(4);
+    }
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+TEST(LoadMap, RefusesWhatIsNotARegularFileWithoutReadingIt) {
+  Scratch scratch;
+  const std::string fifo = scratch.file("fifo.ot");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  EXPECT_EQ(loadInChild(fifo), 1) << "a FIFO (status 142: blocked until the alarm)";
+  EXPECT_EQ(loadInChild("/dev/zero"), 1) << "a device";
+  EXPECT_EQ(loadInChild(scratch.file("")), 1) << "a directory";
+}
+
+TEST(LoadMap, RefusesAFileLargerThanTheLimit) {
+  Scratch scratch;
+  const std::string path = scratch.file("map.ot");
+  saveMap(*smallMap(), path);
+  const uint64_t size = readBytes(path).size();
+  EXPECT_NO_THROW(loadMap(path, size));
+  EXPECT_THROW(loadMap(path, size - 1), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace evidential_octomap
