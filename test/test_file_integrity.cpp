@@ -78,11 +78,24 @@ size_t sectionStart(const std::string& bytes) {
 constexpr size_t kVersionOffset = 4;     // after the magic
 constexpr size_t kResolutionOffset = 8;  // format 2 only
 
-// The same map as format 1 wrote it: no resolution field, no CRC.
+// The same map as format 1 wrote it: no resolution, downsampling and kernel_distance fields
+// (the map must use their defaults), no CRC.
 std::string toFormat1(const std::string& bytes) {
   const size_t s = sectionStart(bytes);
+  auto u32At = [&](size_t at) {
+    uint32_t v;
+    std::memcpy(&v, &bytes[at], 4);
+    return v;
+  };
+  size_t at = s + kResolutionOffset + 8;  // the class count
+  const uint32_t num_classes = u32At(at);
+  at += 4;
+  for (uint32_t c = 0; c <= num_classes; ++c) at += 4 + u32At(at);  // names, then the rule
+  const size_t dropped_begin = at;
+  for (int i = 0; i < 2; ++i) at += 4 + u32At(at);  // downsampling, kernel_distance
   std::string old = bytes.substr(0, s + kResolutionOffset) +
-                    bytes.substr(s + kResolutionOffset + 8, bytes.size() - 4 - (s + 16));
+                    bytes.substr(s + kResolutionOffset + 8, dropped_begin - (s + 16)) +
+                    bytes.substr(at, bytes.size() - 4 - at);
   const uint32_t one = 1;
   std::memcpy(&old[s + kVersionOffset], &one, 4);
   return old;

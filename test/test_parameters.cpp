@@ -186,7 +186,9 @@ TEST(ParameterSpace, EverySemanticConfigTheTreeAcceptsIsSavedAndLoaded) {
     } catch (const std::invalid_argument&) {
       ++refused;
       EXPECT_FALSE(config.problem().empty()) << what.str();
-      if (refused < 20) EXPECT_THROW(EvidentialOcTree(0.2, 3, config), std::invalid_argument);
+      if (refused < 20) {
+        EXPECT_THROW(EvidentialOcTree(0.2, 3, config), std::invalid_argument);
+      }
       continue;
     }
     ++accepted;
