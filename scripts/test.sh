@@ -167,6 +167,12 @@ else
   t0=${SECONDS}
   if catkin_make -C "${ws}" "${catkin_args[@]}" -j"${jobs}"; then
     echo "test.sh: catkin workspace built in $((SECONDS - t0)) s"
+    # catkin caches the devel space's environment when it configures, with only the directories
+    # that exist then: on a fresh workspace devel/lib/python3 does not, and run_tests (which uses
+    # that cache) cannot import our messages from Python (rosservice, rostopic). Configure again.
+    if ! grep -q "devel/lib/python3/dist-packages" "${ws}/build/catkin_generated/setup_cached.sh"; then
+      cmake "${ws}/build" >/dev/null
+    fi
     note "catkin: run_tests"
     t0=${SECONDS}
     # Results of tests that no longer exist must not linger.
