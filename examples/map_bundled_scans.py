@@ -15,4 +15,5 @@ for scan in scans:
 tree.save(sys.argv[1] if len(sys.argv) > 1 else "map.ot")
 points, gt = np.concatenate([s.points_world() for s in scans]), np.concatenate([s.gt for s in scans])
 m = eo.evaluate_map(tree, points, gt, ignore_class=classes.ignore_class)
-print(f"{tree.num_leaves} leaves; O.Acc {m.occupied_accuracy:.1%} mIoU {m.miou:.1%} Acc {m.accuracy:.1%}")
+q = m.quality  # every query counts; one without evidence is wrong
+print(f"{tree.num_leaves} leaves; coverage {m.semantic_coverage:.1%} mIoU {q.miou_all:.1%} Acc {q.acc_all:.1%}")

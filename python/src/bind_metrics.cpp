@@ -1,6 +1,7 @@
 // The CLI's metrics (core metrics.h) on numpy queries: map metrics and the input's per-point ones.
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
 
 #include "bindings.h"
 #include "evidential_octomap/metrics.h"
@@ -43,36 +44,44 @@ std::vector<Query> makeQueries(const PointsIn& points, const LabelsIn& gt,
 }  // namespace
 
 void bindMetrics(nb::module_& m) {
+  nb::class_<QualityMetrics>(m, "QualityMetrics",
+                             "One row's metrics on the queries (metrics.h): the map's or the "
+                             "input's answers.")
+      .def_ro("queries", &QualityMetrics::queries)
+      .def_ro("labelled", &QualityMetrics::labelled, "Queries with an answer (a label).")
+      .def_ro("miou_all", &QualityMetrics::miou_all, "Over every query, no label = wrong.")
+      .def_ro("acc_all", &QualityMetrics::acc_all)
+      .def_ro("miou_labelled", &QualityMetrics::miou_labelled)
+      .def_ro("acc_labelled", &QualityMetrics::acc_labelled)
+      .def_ro("brier", &QualityMetrics::brier, "Multi-class Brier score over every query.")
+      .def_ro("nll", &QualityMetrics::nll)
+      .def_ro("ece", &QualityMetrics::ece)
+      .def_ro("error_rate_labelled", &QualityMetrics::error_rate_labelled)
+      .def_prop_ro(
+          "error_detection",
+          [](const QualityMetrics& q) {
+            nb::dict out;
+            for (const ErrorDetection& d : q.error_detection) {
+              out[d.output.c_str()] = nb::make_tuple(d.auroc, d.aurc);
+            }
+            return out;
+          },
+          "{output: (AUROC, AURC)} for 'the label is wrong' among labelled queries.")
+      .def_prop_ro(
+          "iou_all", [](const QualityMetrics& q) { return iouArray(q.all); }, kShared,
+          "(C,) IoU per class over every query (NaN: class absent).")
+      .def_prop_ro(
+          "confusion_all", [](const QualityMetrics& q) { return confusionArray(q.all); },
+          kShared, "(C, C + 1) every query, rows GT, last column 'no label'.")
+      .def_prop_ro(
+          "confusion_labelled",
+          [](const QualityMetrics& q) { return confusionArray(q.labelled_only); }, kShared);
   nb::class_<MapMetrics>(m, "MapMetrics", "Map metrics of DESIGN section 6 (metrics.h).")
-      .def_ro("queries", &MapMetrics::queries)
-      .def_ro("covered", &MapMetrics::covered, "Queries whose voxel is occupied.")
-      .def_ro("occupied_accuracy", &MapMetrics::occupied_accuracy, "O.Acc = covered / queries.")
-      .def_ro("miou", &MapMetrics::miou, "Over covered queries.")
-      .def_ro("accuracy", &MapMetrics::accuracy, "Over covered queries.")
-      .def_ro("miou_all", &MapMetrics::miou_all, "Over every query, uncovered = wrong.")
-      .def_ro("accuracy_all", &MapMetrics::accuracy_all)
-      .def_ro("brier", &MapMetrics::brier)
-      .def_ro("mean_u_correct", &MapMetrics::mean_u_correct)
-      .def_ro("mean_u_wrong", &MapMetrics::mean_u_wrong)
-      .def_prop_ro("uncertainty_scale", [](const MapMetrics& r) { return r.scale.describe(); })
-      .def_prop_ro(
-          "iou", [](const MapMetrics& r) { return iouArray(r.confusion); }, kShared,
-          "(C,) IoU per class over covered queries (NaN: class absent).")
-      .def_prop_ro(
-          "confusion", [](const MapMetrics& r) { return confusionArray(r.confusion); }, kShared,
-          "(C, C + 1) covered queries, rows GT, last column 'no label'.")
-      .def_prop_ro(
-          "confusion_all", [](const MapMetrics& r) { return confusionArray(r.confusion_all); },
-          kShared);
-  nb::class_<PredictionMetrics>(m, "PredictionMetrics", "The input's per-point metrics.")
-      .def_ro("queries", &PredictionMetrics::queries)
-      .def_ro("miou", &PredictionMetrics::miou)
-      .def_ro("accuracy", &PredictionMetrics::accuracy)
-      .def_prop_ro(
-          "iou", [](const PredictionMetrics& r) { return iouArray(r.confusion); }, kShared)
-      .def_prop_ro(
-          "confusion", [](const PredictionMetrics& r) { return confusionArray(r.confusion); },
-          kShared);
+      .def_ro("quality", &MapMetrics::quality)
+      .def_ro("occupied", &MapMetrics::occupied, "Queries whose voxel is occupied.")
+      .def_ro("occupancy_coverage", &MapMetrics::occupancy_coverage)
+      .def_ro("semantic_coverage", &MapMetrics::semantic_coverage,
+              "Queries whose voxel holds evidence (the paper's O.Acc).");
 
   m.def(
       "evaluate_map",
@@ -87,7 +96,8 @@ void bindMetrics(nb::module_& m) {
       "Metrics of the map at GT-labelled points (map frame), as `evidential_octomap eval`.");
   m.def(
       "evaluate_predictions",
-      [](const LabelsIn& gt, const LabelsIn& predicted, int num_classes, int ignore_class) {
+      [](const LabelsIn& gt, const LabelsIn& predicted, int num_classes, int ignore_class,
+         std::optional<MatrixIn> evidence) {
         if (gt.shape(0) != predicted.shape(0)) {
           throw std::invalid_argument("gt and predicted must have the same length");
         }
@@ -96,10 +106,19 @@ void bindMetrics(nb::module_& m) {
           queries[i].gt = gt.data()[i];
           queries[i].predicted = predicted.data()[i];
         }
-        return evaluatePredictions(queries, num_classes, ignore_class);
+        std::vector<float> e;
+        if (evidence) {
+          if (evidence->shape(0) != queries.size() || int(evidence->shape(1)) != num_classes) {
+            throw std::invalid_argument("evidence must be (N, num_classes)");
+          }
+          e.assign(evidence->data(), evidence->data() + evidence->size());
+        }
+        return evaluateInput(queries, e, num_classes, ignore_class);
       },
       nb::arg("gt"), nb::arg("predicted"), nb::arg("num_classes"), nb::arg("ignore_class") = -1,
-      "The input predictions' per-point metrics on the same queries.");
+      nb::arg("evidence") = nb::none(),
+      "The input's per-point metrics on the same queries: each point's evidence (N, C) when "
+      "given, else its hard prediction.");
 }
 
 }  // namespace evidential_octomap::python

@@ -13,7 +13,7 @@ def test_example_maps_the_bundled_scans(tmp_path):
     assert len(EXAMPLE.read_text().splitlines()) <= 20
     out = subprocess.run([sys.executable, str(EXAMPLE), str(tmp_path / "map.ot")], check=True,
                          capture_output=True, text=True).stdout
-    found = re.fullmatch(r"(\d+) leaves; O.Acc ([\d.]+)% mIoU ([\d.]+)% Acc ([\d.]+)%\n", out)
+    found = re.fullmatch(r"(\d+) leaves; coverage ([\d.]+)% mIoU ([\d.]+)% Acc ([\d.]+)%\n", out)
     assert found, out
     assert eo.load(tmp_path / "map.ot").num_leaves == int(found.group(1))
     assert all(0 < float(v) <= 100 for v in found.groups()[1:])

@@ -46,21 +46,29 @@ def test_map_metrics_equal_a_numpy_recomputation(kitti_scans, kitti_classes):
     points, gt = scan.points_world()[keep], scan.gt[keep]
     metrics = eo.evaluate_map(tree, points, gt, scan.predicted[keep], kitti_classes.ignore_class)
     answer = tree.query(points)
-    covered = answer.occupied
-    assert metrics.queries == len(gt) and metrics.covered == covered.sum()
-    assert metrics.occupied_accuracy == pytest.approx(covered.mean())
-    predicted, truth = answer.labels[covered], gt[covered]
-    assert metrics.accuracy == pytest.approx((predicted == truth).mean())
+    labelled = answer.labels >= 0
+    q = metrics.quality
+    assert q.queries == len(gt) and q.labelled == labelled.sum()
+    assert metrics.occupied == answer.occupied.sum()
+    assert metrics.semantic_coverage == pytest.approx(labelled.mean())
+    # Every query counts; a query whose voxel holds no evidence is wrong.
+    assert q.acc_all == pytest.approx((answer.labels == gt).mean())
     ious = []
     for c in range(kitti_classes.num_classes):
-        if c == kitti_classes.ignore_class or not (truth == c).any():
+        if c == kitti_classes.ignore_class or not (gt == c).any():
             continue
-        tp = ((predicted == c) & (truth == c)).sum()
-        ious.append(tp / ((predicted == c) | (truth == c)).sum())
-    assert metrics.miou == pytest.approx(np.mean(ious))
-    assert metrics.confusion.sum() == covered.sum()
+        tp = ((answer.labels == c) & (gt == c)).sum()
+        ious.append(tp / ((answer.labels == c) | (gt == c)).sum())
+    assert q.miou_all == pytest.approx(np.mean(ious))
+    assert q.confusion_all.sum() == len(gt)
+    # Brier of the projected probabilities b + u / C (uniform without a label).
+    p = answer.belief + answer.uncertainty[:, None] / 20
+    p[~labelled] = 1.0 / 20
+    onehot = np.eye(20)[gt]
+    assert q.brier == pytest.approx(((p - onehot) ** 2).sum(axis=1).mean(), rel=1e-4)
+    assert set(q.error_detection) == {"u", "conflict", "1-max_p", "dissonance"}
     inputs = eo.evaluate_predictions(gt, scan.predicted[keep], 20, kitti_classes.ignore_class)
-    assert inputs.accuracy == pytest.approx((scan.predicted[keep] == gt).mean())
+    assert inputs.acc_all == pytest.approx((scan.predicted[keep] == gt).mean())
 
 
 def cli_binary():
