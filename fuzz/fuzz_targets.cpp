@@ -140,9 +140,9 @@ void exercise(EvidentialOcTree& tree, bool heavy) {
   size_t semantic = 0;
   for (auto it = tree.begin_tree(), end = tree.end_tree(); it != end; ++it) {
     checkOpinion(tree, &*it, "as read");
-    if (tree.payload(&*it)) ++semantic;
+    if (it.isLeaf() && tree.payload(&*it)) ++semantic;  // inner nodes name a leaf's payload
   }
-  require(semantic == tree.numSemanticNodes(), "numSemanticNodes() disagrees with the nodes");
+  require(semantic == tree.numSemanticNodes(), "numSemanticNodes() disagrees with the leaves");
   checkOpinion(tree, nullptr, "prior");
   size_t leaves = 0;
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end && leaves < 4096;

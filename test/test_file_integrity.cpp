@@ -1,7 +1,7 @@
 // Integrity of .ot files (issue 16 item 10): a CRC-32 over the semantic section and invariant
-// checks after reading, so an altered file never loads as a different map; format-1 files (no
-// CRC) still load; loadMap reads regular files only; readProblem() tells in one call whether
-// OctoMap's generic reader gave a complete map.
+// checks after reading, so an altered file never loads as a different map; files of formats 1
+// (no CRC) and 2 (inner payloads stored) still load; loadMap reads regular files only;
+// readProblem() tells in one call whether OctoMap's generic reader gave a complete map.
 #include <gtest/gtest.h>
 #include <octomap/AbstractOcTree.h>
 #include <octomap/OcTree.h>
@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <iomanip>
 #include <iterator>
 #include <memory>
@@ -74,34 +75,7 @@ size_t sectionStart(const std::string& bytes) {
   return at == std::string::npos ? std::string::npos : at + 6;
 }
 
-// The layout of format 2 as documented in ot_format.cpp, used to edit files by hand.
-constexpr size_t kVersionOffset = 4;     // after the magic
-constexpr size_t kResolutionOffset = 8;  // format 2 only
-
-// The same map as format 1 wrote it: no resolution, downsampling and kernel_distance fields
-// (the map must use their defaults), no CRC.
-std::string toFormat1(const std::string& bytes) {
-  const size_t s = sectionStart(bytes);
-  auto u32At = [&](size_t at) {
-    uint32_t v;
-    std::memcpy(&v, &bytes[at], 4);
-    return v;
-  };
-  size_t at = s + kResolutionOffset + 8;  // the class count
-  const uint32_t num_classes = u32At(at);
-  at += 4;
-  for (uint32_t c = 0; c <= num_classes; ++c) at += 4 + u32At(at);  // names, then the rule
-  const size_t dropped_begin = at;
-  for (int i = 0; i < 2; ++i) at += 4 + u32At(at);  // downsampling, kernel_distance
-  std::string old = bytes.substr(0, s + kResolutionOffset) +
-                    bytes.substr(s + kResolutionOffset + 8, dropped_begin - (s + 16)) +
-                    bytes.substr(at, bytes.size() - 4 - at);
-  const uint32_t one = 1;
-  std::memcpy(&old[s + kVersionOffset], &one, 4);
-  return old;
-}
-
-// Recomputes the trailing CRC of a format-2 file (an edit that a CRC alone would not catch).
+// Recomputes the trailing CRC of a format-2 or -3 file (an edit that a CRC alone would not catch).
 void reseal(std::string* bytes) {
   const size_t s = sectionStart(*bytes);
   const uint32_t crc = crc32Update(0, bytes->data() + s, bytes->size() - 4 - s);
@@ -113,6 +87,91 @@ size_t rootOffset(const std::string& bytes, uint64_t size) {
   std::string pattern(8, '\0');
   std::memcpy(&pattern[0], &size, 8);
   return bytes.find(pattern, sectionStart(bytes)) + 8;
+}
+
+// The layout of the format documented in ot_format.cpp, used to edit files by hand.
+constexpr size_t kVersionOffset = 4;     // after the magic
+constexpr size_t kResolutionOffset = 8;  // formats 2 and 3
+
+uint32_t u32At(const std::string& bytes, size_t at) {
+  uint32_t v;
+  std::memcpy(&v, &bytes[at], 4);
+  return v;
+}
+
+// Format 3's node records re-encoded as formats 1 and 2 wrote them (an independent encoder of
+// the old layout): a has-payload flag on every node, dense payloads, and on inner nodes a copy
+// of the richest child's payload (largest sum, first on ties). Returns the payload this node
+// stands for (empty: none). `prior` fills the classes a sparse payload leaves out.
+std::vector<float> reencodeNode(const std::string& in, size_t* at, int num_classes, float prior,
+                                std::string* out) {
+  const std::string value_and_mask = in.substr(*at, 5);
+  const uint8_t children = static_cast<uint8_t>(in[*at + 4]);
+  *at += 5;
+  std::vector<float> payload;
+  std::string records;
+  if (children == 0) {
+    const uint8_t tag = static_cast<uint8_t>(in[(*at)++]);
+    if (tag == 1) {
+      payload.resize(num_classes);
+      std::memcpy(payload.data(), &in[*at], 4 * num_classes);
+      *at += 4 * num_classes;
+    } else if (tag >= 2) {
+      payload.assign(num_classes, prior);
+      for (int pair = 0; pair < tag - 2; ++pair, *at += 5) {
+        std::memcpy(&payload[static_cast<uint8_t>(in[*at])], &in[*at + 1], 4);
+      }
+    }
+  } else {
+    double richest = -1e300;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (!(children & (1u << i))) continue;
+      const std::vector<float> child = reencodeNode(in, at, num_classes, prior, &records);
+      double sum = 0.0;
+      for (float v : child) sum += v;
+      if (!child.empty() && sum > richest) {
+        richest = sum;
+        payload = child;
+      }
+    }
+  }
+  *out += value_and_mask;
+  *out += static_cast<char>(payload.empty() ? 0 : 1);
+  if (!payload.empty()) out->append(reinterpret_cast<const char*>(payload.data()), 4 * num_classes);
+  *out += records;
+  return payload;
+}
+
+// The same map as format 2 wrote it (inner payloads, dense payloads), from a format-3 file.
+std::string toFormat2(const std::string& bytes, const EvidentialOcTree& tree) {
+  const size_t s = sectionStart(bytes);
+  size_t at = rootOffset(bytes, tree.size());
+  std::string nodes;
+  reencodeNode(bytes, &at, tree.numClasses(), tree.rule().prior(), &nodes);
+  std::string old = bytes.substr(0, rootOffset(bytes, tree.size())) + nodes +
+                    bytes.substr(at, bytes.size() - at);  // end magic and CRC
+  const uint32_t two = 2;
+  std::memcpy(&old[s + kVersionOffset], &two, 4);
+  reseal(&old);
+  return old;
+}
+
+// The same map as format 1 wrote it: no resolution, downsampling and kernel_distance fields
+// (the map must use their defaults), no CRC; from a format-2 file.
+std::string toFormat1(const std::string& bytes) {
+  const size_t s = sectionStart(bytes);
+  size_t at = s + kResolutionOffset + 8;  // the class count
+  const uint32_t num_classes = u32At(bytes, at);
+  at += 4;
+  for (uint32_t c = 0; c <= num_classes; ++c) at += 4 + u32At(bytes, at);  // names, the rule
+  const size_t dropped_begin = at;
+  for (int i = 0; i < 2; ++i) at += 4 + u32At(bytes, at);  // downsampling, kernel_distance
+  std::string old = bytes.substr(0, s + kResolutionOffset) +
+                    bytes.substr(s + kResolutionOffset + 8, dropped_begin - (s + 16)) +
+                    bytes.substr(at, bytes.size() - 4 - at);
+  const uint32_t one = 1;
+  std::memcpy(&old[s + kVersionOffset], &one, 4);
+  return old;
 }
 
 TEST(Crc32, MatchesTheStandardCheckValue) {
@@ -167,59 +226,77 @@ TEST(Integrity, NoAlteredFileLoadsAsADifferentMap) {
   RecordProperty("same", std::to_string(same));
 }
 
-TEST(Integrity, Format1FilesWithoutChecksumStillLoad) {
+TEST(Integrity, Format1And2FilesStillLoad) {
   Scratch scratch;
-  const auto tree = smallMap();
-  std::ostringstream out;
-  out << std::setprecision(17);
-  tree->write(out);
-  const std::string path = scratch.file("format1.ot");
-  writeBytes(path, toFormat1(out.str()));
-  std::unique_ptr<EvidentialOcTree> loaded;
-  ASSERT_NO_THROW(loaded = loadMap(path));
-  EXPECT_TRUE(compareTrees(*tree, *loaded));
-  // And through OctoMap's generic reader.
-  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
-  EXPECT_EQ(readProblem(any.get()), "");
+  for (const std::string rule : {"dempster", "ebs"}) {
+    SemanticConfig config;
+    config.rule = rule;
+    auto tree = std::make_unique<EvidentialOcTree>(0.2, 3, config);
+    octomap::Pointcloud points;
+    std::vector<float> evidence;
+    for (int i = 0; i < 9; ++i) {
+      points.push_back(1.1f + 0.1f * (i % 2), -0.8f + 0.2f * i, 0.1f);
+      evidence.insert(evidence.end(), {float(i), 2.0f, i % 3 ? 0.0f : 0.5f});
+    }
+    tree->insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.5f));
+    std::ostringstream out;
+    out << std::setprecision(17);
+    tree->write(out);
+    const std::string v2 = toFormat2(out.str(), *tree);
+    ASSERT_GT(v2.size(), out.str().size()) << "format 2 stores inner payloads";
+    for (const std::string& file : {v2, toFormat1(v2)}) {
+      const std::string path = scratch.file("old_format.ot");
+      writeBytes(path, file);
+      std::unique_ptr<EvidentialOcTree> loaded;
+      ASSERT_NO_THROW(loaded = loadMap(path)) << rule;
+      EXPECT_TRUE(compareTrees(*tree, *loaded)) << rule;
+      // And through OctoMap's generic reader.
+      std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
+      EXPECT_EQ(readProblem(any.get()), "");
+    }
+  }
 }
 
-// An inner node that disagrees with its children: refused in a format-1 file (no CRC) and in a
-// format-2 file whose CRC was recomputed after the edit.
+// An inner node that disagrees with its children: refused in a format-3 file whose CRC was
+// recomputed after the edit, and (log-odds or stored evidence) in files of formats 1 and 2.
 TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   Scratch scratch;
   const auto tree = smallMap();
+  ASSERT_TRUE(tree->getRoot()->hasSemantics());
   std::ostringstream out;
   out << std::setprecision(17);
   tree->write(out);
-  const std::string v2 = out.str();
-  const size_t root = rootOffset(v2, tree->size());
+  const std::string v3 = out.str(), v2 = toFormat2(v3, *tree);
+  const size_t root = rootOffset(v3, tree->size());
   float root_value;
-  std::memcpy(&root_value, &v2[root], 4);
+  std::memcpy(&root_value, &v3[root], 4);
   ASSERT_EQ(root_value, tree->getRoot()->getValue()) << "root offset not found";
-  for (const char* what : {"log-odds", "evidence"}) {
-    std::string edited = v2;
-    if (std::string(what) == "log-odds") {
-      const float other = root_value + 0.5f;
-      std::memcpy(&edited[root], &other, 4);
-    } else {  // the root's first payload entry (after value, child mask and payload flag)
-      ASSERT_TRUE(tree->getRoot()->hasSemantics());
-      float first;
-      std::memcpy(&first, &edited[root + 6], 4);
-      first += 1.0f;
-      std::memcpy(&edited[root + 6], &first, 4);
+  auto refused = [&](const std::string& file, const std::string& what) {
+    const std::string path = scratch.file("inner.ot");
+    writeBytes(path, file);
+    try {
+      loadMap(path);
+      ADD_FAILURE() << what << ": an inconsistent inner node was loaded";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("inner node"), std::string::npos) << e.what();
     }
+  };
+  const float other = root_value + 0.5f;
+  for (std::string edited : {v3, v2}) {
+    std::memcpy(&edited[root], &other, 4);
     reseal(&edited);
-    for (const std::string& file : {edited, toFormat1(edited)}) {
-      const std::string path = scratch.file("inner.ot");
-      writeBytes(path, file);
-      try {
-        loadMap(path);
-        ADD_FAILURE() << what << ": an inconsistent inner node was loaded";
-      } catch (const std::runtime_error& e) {
-        EXPECT_NE(std::string(e.what()).find("inner node"), std::string::npos) << e.what();
-      }
-    }
+    refused(edited, "log-odds");
+    if (edited.size() == v2.size()) refused(toFormat1(edited), "log-odds, format 1");
   }
+  // The root's first stored payload entry (after value, child mask and payload flag).
+  std::string edited = v2;
+  float first;
+  std::memcpy(&first, &edited[root + 6], 4);
+  first += 1.0f;
+  std::memcpy(&edited[root + 6], &first, 4);
+  reseal(&edited);
+  refused(edited, "evidence, format 2");
+  refused(toFormat1(edited), "evidence, format 1");
 }
 
 // OctoMap's header `res` and the section's exact resolution: rounding (6 digits, what a plain
@@ -282,13 +359,25 @@ TEST(ReadProblem, TellsEveryWayTheGenericReaderCanFall) {
   EXPECT_NE(readProblem(read.get()).find("OcTree"), std::string::npos);
 }
 
-// Stale inner nodes (OctoMap's deleteNode does not refresh our inner summaries) are not
+// Inner nodes whose occupancy is stale (OctoMap's lazy_eval updates leave them so) are not
 // written, because the reader would refuse them; updateInnerNodes() makes the map savable.
 TEST(Integrity, StaleInnerNodesAreNotWritten) {
   Scratch scratch;
   auto tree = smallMap();
-  // Delete the leaf the root summarises (the richest), leaving its siblings.
-  const EvidentialOcTreeNode* richest = nullptr;
+  // A hit far above the rest: the root's log-odds must follow, and lazy_eval leaves them.
+  tree->updateNode(octomap::point3d(1.1f, 0.1f, 0.1f), 3.0f, /*lazy_eval=*/true);
+  const std::string path = scratch.file("stale.ot");
+  EXPECT_THROW(saveMap(*tree, path), std::runtime_error);
+  tree->updateInnerNodes();
+  ASSERT_NO_THROW(saveMap(*tree, path));
+  EXPECT_TRUE(compareTrees(*tree, *loadMap(path)));
+}
+
+// Format 3 stores no inner summary: after OctoMap's deleteNode (which refreshes occupancy but
+// not our summaries) the map is written, and reads back with the summaries derived again.
+TEST(Integrity, SummariesAreDerivedAgainOnReading) {
+  Scratch scratch;
+  auto tree = smallMap();
   octomap::OcTreeKey richest_key;
   double best = -1.0;
   for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
@@ -297,22 +386,21 @@ TEST(Integrity, StaleInnerNodesAreNotWritten) {
     const double sum = double(p[0]) + p[1] + p[2];
     if (sum > best) {
       best = sum;
-      richest = &*it;
       richest_key = it.getKey();
     }
   }
-  ASSERT_NE(richest, nullptr);
+  ASSERT_GT(best, 0.0);
   const EvidentialOcTreeNode* parent = tree->search(richest_key, tree->getTreeDepth() - 1);
   unsigned siblings = 0;
   for (unsigned i = 0; i < 8; ++i) siblings += tree->nodeChildExists(parent, i) ? 1 : 0;
   ASSERT_GE(siblings, 2u) << "OctoMap 1.9 cannot delete an only child";
   tree->deleteNode(richest_key);
-  const std::string path = scratch.file("stale.ot");
-  EXPECT_THROW(saveMap(*tree, path), std::runtime_error);
+  const std::string path = scratch.file("deleted.ot");
+  ASSERT_NO_THROW(saveMap(*tree, path));
+  const auto loaded = loadMap(path);
   tree->updateInnerNodes();
   tree->compactPayloads();  // deleteNode leaves the deleted leaf's payload slot in the pool
-  ASSERT_NO_THROW(saveMap(*tree, path));
-  EXPECT_TRUE(compareTrees(*tree, *loadMap(path)));
+  EXPECT_TRUE(compareTrees(*tree, *loaded));
 }
 
 // --- loadMap on what is not a regular file (issue 16 item 6) ---------------------------------

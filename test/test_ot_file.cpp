@@ -13,6 +13,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -190,6 +191,84 @@ TEST(OtFile, ManyClassesAndOddNamesRoundTrip) {
   const auto loaded = loadMap(dir.file("c255.ot"));
   EXPECT_TRUE(compareTrees(tree, *loaded));
   EXPECT_EQ(loaded->classNames()[1], names[1]);
+}
+
+// Format 3 stores a payload for leaves only, each in the shorter of its two forms. The size of
+// the node records is recomputed here from the tree: 4 B log-odds + 1 B child mask per node,
+// and per leaf a tag byte plus min(4 C dense, 5 B per class whose bits differ from the prior).
+TEST(OtFile, Format3StoresLeafPayloadsOnlyInTheShorterForm) {
+  for (const std::string& rule : kFusionRuleNames) {
+    const auto tree = makeMap(rule);
+    const int c = tree->numClasses();
+    const float prior = tree->rule().prior();
+    size_t expected = 0, inner_with_semantics = 0;
+    for (auto it = tree->begin_tree(); it != tree->end_tree(); ++it) {
+      expected += 5;
+      if (!it.isLeaf()) {
+        inner_with_semantics += it->hasSemantics() ? 1 : 0;
+        continue;
+      }
+      expected += 1;
+      if (const float* p = tree->payload(&*it)) {
+        size_t differing = 0;
+        for (int k = 0; k < c; ++k) differing += test::sameBits(p[k], prior) ? 0 : 1;
+        const size_t sparse = 5 * differing;
+        expected += sparse < 4u * c ? sparse : 4u * c;
+      }
+    }
+    ASSERT_GT(inner_with_semantics, 10u) << rule;
+    std::ostringstream full, empty;
+    tree->writeData(full);
+    EvidentialOcTree blank(tree->getResolution(), c, tree->config());
+    blank.setClassNames(tree->classNames());
+    blank.writeData(empty);
+    EXPECT_EQ(full.str().size() - empty.str().size(), expected) << rule;
+  }
+}
+
+// Files written before format 3 (inner nodes carried a copy of a child's payload) still load:
+// the fixtures were written by the format-1 library, which also dumped every leaf it read back.
+TEST(OtFile, Format1FilesOfTheOldLibraryStillLoadLeafForLeaf) {
+  for (const std::string rule : {"dempster", "sbki"}) {
+    const std::string fixtures = std::string(EVIDENTIAL_OCTOMAP_SOURCE_DIR) + "/test/fixtures/";
+    const auto tree = loadMap(fixtures + "ot_v1_" + rule + ".ot");
+    ASSERT_EQ(tree->config().rule, rule);
+    std::ifstream dump(fixtures + "ot_v1_" + rule + ".leaves.txt");
+    std::string line;
+    std::getline(dump, line);  // comment
+    size_t leaves = 0, semantic = 0;
+    for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it, ++leaves) {
+      ASSERT_TRUE(std::getline(dump, line)) << "more leaves than the dump";
+      std::istringstream fields(line);
+      unsigned k0, k1, k2, depth, value_bits;
+      fields >> k0 >> k1 >> k2 >> depth >> value_bits;
+      EXPECT_EQ(octomap::OcTreeKey(k0, k1, k2), it.getKey());
+      EXPECT_EQ(depth, it.getDepth());
+      float value;
+      std::memcpy(&value, &value_bits, 4);
+      EXPECT_TRUE(test::sameBits(value, it->getLogOdds()));
+      std::vector<float> payload;
+      for (unsigned bits; fields >> bits;) {
+        payload.push_back(0.0f);
+        std::memcpy(&payload.back(), &bits, 4);
+      }
+      const float* p = tree->payload(&*it);
+      ASSERT_EQ(p != nullptr, !payload.empty());
+      if (!p) continue;
+      ++semantic;
+      for (int c = 0; c < tree->numClasses(); ++c) EXPECT_TRUE(test::sameBits(p[c], payload[c]));
+    }
+    EXPECT_FALSE(std::getline(dump, line)) << "fewer leaves than the dump";
+    EXPECT_EQ(tree->numSemanticNodes(), semantic);
+    EXPECT_GT(semantic, 50u);
+    // Saved again, it is a format-3 file that reads back equal.
+    std::stringstream again;
+    tree->write(again);
+    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(again));
+    auto* reread = dynamic_cast<EvidentialOcTree*>(read.get());
+    ASSERT_NE(reread, nullptr);
+    EXPECT_TRUE(compareTrees(*tree, *reread));
+  }
 }
 
 TEST(OtFile, InsertingAfterLoadContinuesLikeTheOriginal) {
@@ -577,7 +656,7 @@ std::string wellFormedProblem(const EvidentialOcTree& tree) {
     ++nodes;
     if (!std::isfinite(it->getLogOdds())) return "non-finite log-odds";
     if (!it->hasSemantics()) continue;
-    ++semantic;
+    if (it.isLeaf()) ++semantic;  // inner nodes name a leaf's payload
     if (!tree.payload(&*it)) return "semantic node without payload";
     const VoxelOpinion v = tree.opinion(&*it);
     if (v.label < -1 || v.label >= tree.numClasses()) return "label out of range";
@@ -590,7 +669,7 @@ std::string wellFormedProblem(const EvidentialOcTree& tree) {
     }
   }
   if (nodes != tree.size()) return "node count differs from size()";
-  if (semantic != tree.numSemanticNodes()) return "semantic node count differs";
+  if (semantic != tree.numSemanticNodes()) return "semantic leaf count differs";
   return "";
 }
 

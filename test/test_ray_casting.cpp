@@ -1,10 +1,12 @@
-// Our parallel ray casting must give exactly the occupancy OctoMap's own insertPointCloud gives.
+// Our parallel ray casting must give exactly the occupancy OctoMap's own insertPointCloud gives,
+// and its DDA exactly the keys of OctoMap's computeRayKeys.
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
 #include <random>
 
 #include "evidential_octomap/evidential_octree.h"
+#include "ray_casting.h"  // private to the core: rayKeys, the DDA under test
 
 using evidential_octomap::EvidentialOcTree;
 using evidential_octomap::SemanticConfig;
@@ -68,3 +70,62 @@ void checkAgainstOctoMap(double max_range, bool discretize) {
 TEST(RayCasting, MatchesOctoMapInsertPointCloudDiscretized) { checkAgainstOctoMap(-1.0, true); }
 TEST(RayCasting, MatchesOctoMapInsertPointCloudEveryPoint) { checkAgainstOctoMap(-1.0, false); }
 TEST(RayCasting, MatchesOctoMapWithMaxRange) { checkAgainstOctoMap(20.0, true); }
+
+// --- the DDA itself, ray by ray -------------------------------------------------------------
+
+namespace {
+
+// Random rays (synthetic): origins anywhere in a 40 m box, ends from 1 mm to 120 m away, some
+// along an axis or a diagonal, some ending exactly on voxel borders or in the origin's voxel.
+std::vector<std::pair<octomap::point3d, octomap::point3d>> randomRays(unsigned seed, int count) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> coordinate(-20.0f, 20.0f), unit(-1.0f, 1.0f);
+  std::uniform_real_distribution<float> distance(0.001f, 120.0f);
+  std::uniform_int_distribution<int> kind(0, 5), cells(-300, 300);
+  std::vector<std::pair<octomap::point3d, octomap::point3d>> rays;
+  for (int i = 0; i < count; ++i) {
+    octomap::point3d origin(coordinate(rng), coordinate(rng), coordinate(rng));
+    octomap::point3d direction(unit(rng), unit(rng), unit(rng));
+    switch (kind(rng)) {
+      case 0:
+        direction = octomap::point3d(unit(rng), 0.0f, 0.0f);
+        break;  // along an axis
+      case 1:
+        direction = octomap::point3d(1.0f, 1.0f, -1.0f);
+        break;  // diagonal
+      case 2:
+        origin = octomap::point3d(0.2f * cells(rng), 0.2f * cells(rng), 0.1f);
+        break;
+      default:
+        break;
+    }
+    if (direction.norm() < 1e-3) direction = octomap::point3d(0.3f, -0.2f, 0.1f);
+    octomap::point3d end = origin + direction.normalized() * distance(rng);
+    if (i % 7 == 0) end = octomap::point3d(0.2f * cells(rng), 0.2f * cells(rng), 0.2f * cells(rng));
+    rays.emplace_back(origin, end);
+  }
+  return rays;
+}
+
+}  // namespace
+
+TEST(RayCasting, EveryRayVisitsOctoMapsKeysInOctoMapsOrder) {
+  for (double resolution : {0.2, 0.05, 1.0}) {
+    EvidentialOcTree tree(resolution, 1);
+    octomap::KeyRay expected;
+    std::vector<octomap::OcTreeKey> ours;
+    size_t keys = 0;
+    for (const auto& [origin, end] : randomRays(unsigned(resolution * 100), 3000)) {
+      const bool theirs_ok = tree.computeRayKeys(origin, end, expected);
+      ASSERT_EQ(evidential_octomap::rayKeys(tree, origin, end, &ours), theirs_ok);
+      ASSERT_EQ(ours.size(), expected.size()) << "ray " << origin << " -> " << end;
+      size_t i = 0;
+      for (const octomap::OcTreeKey& key : expected) {
+        ASSERT_EQ(ours[i], key) << "cell " << i << " of ray " << origin << " -> " << end;
+        ++i;
+      }
+      keys += ours.size();
+    }
+    EXPECT_GT(keys, 100000u) << "resolution " << resolution;
+  }
+}

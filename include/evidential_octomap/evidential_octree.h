@@ -2,17 +2,18 @@
 // Shaped like OctoMap's ColorOcTree (node type, tree type, static registration), with one
 // difference: the C floats of semantic evidence live in a pool owned by the tree and the node
 // keeps a 32-bit index into it. A node therefore costs exactly what an OcTreeNode costs (16 B);
-// only voxels that received evidence pay 4*C bytes more.
+// only leaves that received evidence pay 4*C bytes more. An inner node stores no payload of its
+// own: its index names the payload of its richest leaf (see updateInnerNodes).
 #pragma once
+
+#include <octomap/OcTreeNode.h>
+#include <octomap/OccupancyOcTreeBase.h>
 
 #include <cstdint>
 #include <iosfwd>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <octomap/OcTreeNode.h>
-#include <octomap/OccupancyOcTreeBase.h>
 
 #include "evidential_octomap/fusion_rule.h"
 #include "evidential_octomap/semantic_config.h"
@@ -21,6 +22,8 @@
 namespace evidential_octomap {
 
 class EvidentialOcTree;
+class PayloadPool;
+class ScanIntegrator;
 
 class EvidentialOcTreeNode : public octomap::OcTreeNode {
  public:
@@ -38,6 +41,11 @@ class EvidentialOcTreeNode : public octomap::OcTreeNode {
 
  private:
   friend class EvidentialOcTree;
+  // Children are made and deleted here, as OctoMap allocates and frees them, but without the
+  // tree's node count, which the caller keeps: threads then edit disjoint subtrees at once.
+  EvidentialOcTreeNode* addChild(unsigned i);
+  void deleteLeafChildren();  // all eight children (leaves) and the child array
+
   uint32_t payload_ = kNoPayload;
 };
 
@@ -51,16 +59,16 @@ struct VoxelUpdate {
 
 // What one call of insertSemanticScan did.
 struct InsertStats {
-  size_t points_in = 0;             // points handed in
-  size_t points_skipped = 0;        // non-finite coordinates or outside the tree's key range
-  size_t points_beyond_range = 0;   // beyond max_range: free space only, no semantics
-  size_t semantic_points = 0;       // points left after down-sampling
+  size_t points_in = 0;                 // points handed in
+  size_t points_skipped = 0;            // non-finite coordinates or outside the tree's key range
+  size_t points_beyond_range = 0;       // beyond max_range: free space only, no semantics
+  size_t semantic_points = 0;           // points left after down-sampling
   size_t points_dropped_uncertain = 0;  // above the percentile threshold
   double uncertainty_threshold = 0.0;   // U_thr of this scan
-  size_t voxels_updated = 0;        // leaves that received semantic evidence
-  double ms_occupancy = 0.0;        // ray casting (free and occupied keys)
-  double ms_kernel = 0.0;           // kernel evaluation and per-voxel aggregation
-  double ms_update = 0.0;           // one tree pass: occupancy + semantics, inner nodes, pruning
+  size_t voxels_updated = 0;            // leaves that received semantic evidence
+  double ms_occupancy = 0.0;            // ray casting (free and occupied keys)
+  double ms_kernel = 0.0;               // kernel evaluation and per-voxel aggregation
+  double ms_update = 0.0;  // one tree pass: occupancy + semantics, inner nodes, pruning
 };
 
 class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNode> {
@@ -75,6 +83,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
                             const SemanticConfig& config = SemanticConfig());
   EvidentialOcTree(const EvidentialOcTree& rhs);
   EvidentialOcTree& operator=(const EvidentialOcTree&) = delete;
+  ~EvidentialOcTree() override;
 
   // --- AbstractOcTree -------------------------------------------------------------------
   EvidentialOcTree* create() const override;
@@ -114,33 +123,42 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
                                  EvidentialOcTree* unobserved = nullptr);
   // Same, with points in the sensor frame and the sensor pose T_W_S.
   InsertStats insertSemanticScan(const octomap::Pointcloud& points_S,
-                                 const std::vector<float>& evidence,
-                                 const octomap::pose6d& T_W_S);
+                                 const std::vector<float>& evidence, const octomap::pose6d& T_W_S);
 
   // --- queries --------------------------------------------------------------------------
   VoxelOpinion opinion(const EvidentialOcTreeNode* node) const;  // node may be null
   VoxelOpinion query(const octomap::point3d& point_W) const;
   VoxelOpinion query(const octomap::OcTreeKey& key, unsigned depth = 0) const;
-  // The node's C floats (rule-specific, see fusion_rule.h), or nullptr if it has none.
+  // The node's C floats (rule-specific, see fusion_rule.h), or nullptr if it has none. For an
+  // inner node, the payload of its richest leaf.
   const float* payload(const EvidentialOcTreeNode* node) const;
-  size_t numSemanticNodes() const { return payload_count_; }
+  // Leaves that hold semantic evidence (each owns one payload slot).
+  size_t numSemanticNodes() const;
 
   // --- editing (used by the integrator, merge and readers) ----------------------------------
   // Leaf at full depth for `key`, expanding pruned nodes; created (log-odds 0) when missing and
   // `create`, else nullptr.
   EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);
-  // The node's payload, allocated with the rule's prior first if it had none.
-  float* payloadForUpdate(EvidentialOcTreeNode* node);
+  // The leaf's payload, allocated with the rule's prior first if it had none. Throws
+  // std::invalid_argument for an inner node (its summary follows its leaves: updateInnerNodes).
+  float* payloadForUpdate(EvidentialOcTreeNode* leaf);
   void clearPayload(EvidentialOcTreeNode* node);
   // Applies a whole scan in one pass over the tree: updates are sorted in Morton order (so every
   // subtree is visited once), missing leaves are created for occupancy updates (and for
   // semantic ones when `create_semantic_leaves`), pruned blocks are split only where something
   // changes, and only the inner nodes above touched leaves are recomputed (and pruned).
-  // `increments` holds C values per row. Returns the number of leaves whose payload changed.
+  // `increments` holds C values per row. Subtrees are updated in parallel (config().threads).
+  // Returns the number of leaves whose payload changed.
   size_t applyUpdates(std::vector<VoxelUpdate> updates, const std::vector<double>& increments,
                       bool create_semantic_leaves);
+  // The same for updates already sorted in Morton order (z, y, x bits interleaved, OctoMap's
+  // child order) with one update per key.
+  size_t applySortedUpdates(const VoxelUpdate* updates, size_t count,
+                            const std::vector<double>& increments, bool create_semantic_leaves);
   // Recomputes inner occupancy and inner semantic summaries bottom-up, then prunes.
-  // Inner summary: a copy of the payload of the child holding the most evidence (largest sum).
+  // Inner summary: the payload of the child holding the most evidence (largest sum; the first
+  // such child on ties), i.e. of the leaf reached by following the richest child downwards. It
+  // is not copied: the inner node names that leaf's slot.
   void updateInnerNodes();
   // Fuses another map of the same resolution, C and rule into this one. Occupancy log-odds add
   // (clamped) and payloads add, so a.merge(b) and b.merge(a) give equal maps.
@@ -158,13 +176,15 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   bool isNodeCollapsible(const EvidentialOcTreeNode* node) const override;
   void expandNode(EvidentialOcTreeNode* node) override;
   bool pruneNode(EvidentialOcTreeNode* node) override;
+  void prune() override;
   void clear() override;
   size_t memoryUsage() const override;
   // The data section (format in ot_format.cpp): semantic header, every node (log-odds, child
-  // mask, payload), a CRC-32 of the section. writeData fails the stream, writing nothing, when
-  // parameterProblem() is not "", and fails it part-way when an inner node is stale (OctoMap's
-  // lazy_eval updates or deleteNode without updateInnerNodes()). readData reads files of format
-  // 1 (no CRC) and 2, checks the CRC, every parameter and every inner node against its children.
+  // mask, and for leaves the payload), a CRC-32 of the section. writeData fails the stream,
+  // writing nothing, when parameterProblem() is not "", and fails it part-way when an inner
+  // node's occupancy is stale (OctoMap's lazy_eval updates or deleteNode without
+  // updateInnerNodes()). readData reads files of formats 1 (no CRC), 2 (inner payloads stored)
+  // and 3, checks the CRC, every parameter and every inner node against its children.
   std::istream& readData(std::istream& s) override;
   std::ostream& writeData(std::ostream& s) const override;
   // Why the last readData failed (empty after a good read). A failed read leaves the tree empty.
@@ -175,46 +195,56 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   bool dataSectionSkipped() const { return created_for_read_; }
 
  private:
+  // What one thread's edit of the tree changes besides the nodes themselves (tree_edit.h).
+  struct Edit;
+  struct UpdateBatch;
+  struct UpdateTask;
+
   void setNumClasses(int num_classes);
-  uint32_t allocatePayload();
-  void releasePayload(EvidentialOcTreeNode* node);
-  float* slot(uint32_t index) { return payloads_.data() + size_t(index) * num_classes_; }
-  const float* slot(uint32_t index) const {
-    return payloads_.data() + size_t(index) * num_classes_;
-  }
+  float* slot(uint32_t index);
+  const float* slot(uint32_t index) const;
   void checkCompatible(const EvidentialOcTree& other, const char* what) const;
   // into += from - prior per class, saturating at FLT_MAX (crafted files may hold huge values).
   void addPayload(float* into, const float* from) const;
+  void commit(Edit& edit);
+  EvidentialOcTreeNode* createChild(EvidentialOcTreeNode* node, unsigned i, Edit& edit);
+  float* leafPayload(EvidentialOcTreeNode* leaf, Edit& edit);
+  void releaseLeafPayload(EvidentialOcTreeNode* leaf, Edit& edit);
+  void expandLeaf(EvidentialOcTreeNode* node, Edit& edit);
+  bool pruneChildren(EvidentialOcTreeNode* node, Edit& edit);
+  void linkSummary(EvidentialOcTreeNode* node) const;
+  void updateInnerNode(EvidentialOcTreeNode* node, Edit& edit);
+  void updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth, Edit& edit);
+  void linkSummariesRecurs(EvidentialOcTreeNode* node, unsigned depth) const;
   void copySubtree(const EvidentialOcTree& from, const EvidentialOcTreeNode* src,
-                   EvidentialOcTreeNode* dst);
-  void updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth);
-  void updateInnerNode(EvidentialOcTreeNode* node);
+                   EvidentialOcTreeNode* dst, Edit& edit);
   // The child whose payload an inner node summarises (largest sum, first on ties), or nullptr.
   const EvidentialOcTreeNode* richestChild(const EvidentialOcTreeNode* node) const;
-  // "" when an inner node holds what updateInnerNode gives it (max child log-odds, the richest
-  // child's payload), else what differs.
+  // "" when an inner node's log-odds are its children's maximum (what updateInnerNode gives it),
+  // else what differs. (Its summary is derived from the children and cannot differ.)
   std::string innerNodeProblem(const EvidentialOcTreeNode* node) const;
-  struct UpdateBatch;
   size_t applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
                             const VoxelUpdate* begin, const VoxelUpdate* end,
-                            const UpdateBatch& batch);
+                            const UpdateBatch& batch, Edit& edit);
   // The data section's bytes with their running CRC-32 (ot_format.cpp).
   class SectionWriter;
   class SectionReader;
   void writeHeader(SectionWriter& out) const;
   void readHeader(SectionReader& in, uint32_t version);
-  bool writeNodesRecurs(const EvidentialOcTreeNode* node, SectionWriter& out) const;
-  void readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, SectionReader& in);
+  bool writeNodes(const EvidentialOcTreeNode* root_node, SectionWriter& out) const;
+  void writePayload(const EvidentialOcTreeNode* leaf, float prior, SectionWriter& out) const;
+  void readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, uint32_t version,
+                       SectionReader& in, Edit& edit);
+  void readPayload(EvidentialOcTreeNode* leaf, uint8_t tag, SectionReader& in, Edit& edit);
 
   int num_classes_ = 1;
   std::vector<std::string> class_names_;
   SemanticConfig config_;
   std::unique_ptr<FusionRule> rule_;
-  std::vector<float> payloads_;         // C floats per slot
-  std::vector<uint32_t> free_payloads_; // released slots, reused first
-  size_t payload_count_ = 0;            // slots in use
+  std::unique_ptr<PayloadPool> pool_;  // C floats per semantic leaf
   std::string read_error_;
   bool created_for_read_ = false;  // made by create(), readData not called yet
+  std::unique_ptr<ScanIntegrator> integrator_;  // created on first insert; keeps scratch buffers
 
   // Registers the tree type with AbstractOcTree (the ColorOcTree pattern).
   class StaticMemberInitializer {

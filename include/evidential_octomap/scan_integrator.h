@@ -3,9 +3,10 @@
 // for the whole scan before each touched leaf is updated once (DESIGN §2).
 #pragma once
 
-#include <vector>
-
 #include <octomap/Pointcloud.h>
+
+#include <memory>
+#include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/semantic_config.h"
@@ -14,7 +15,12 @@ namespace evidential_octomap {
 
 class ScanIntegrator {
  public:
-  explicit ScanIntegrator(const SemanticConfig& config) : config_(config) {}
+  explicit ScanIntegrator(const SemanticConfig& config);
+  ~ScanIntegrator();
+  ScanIntegrator(const ScanIntegrator&) = delete;
+  ScanIntegrator& operator=(const ScanIntegrator&) = delete;
+
+  const SemanticConfig& config() const { return config_; }
 
   // points_W: N points in the world (tree) frame.
   // evidence: N x C row-major evidence, C = tree->numClasses().
@@ -25,12 +31,15 @@ class ScanIntegrator {
   //           EvidentialOcTree::addEvidence.
   // Throws std::invalid_argument before touching the map when evidence is malformed or the
   // kernel support exceeds SemanticConfig::kMaxSupportLeaves (supportProblem()).
+  // Scratch buffers are kept from one call to the next (one integrator per thread).
   InsertStats integrate(const octomap::Pointcloud& points_W, const std::vector<float>& evidence,
                         const octomap::point3d& origin_W, EvidentialOcTree* tree,
-                        EvidentialOcTree* unobserved = nullptr) const;
+                        EvidentialOcTree* unobserved = nullptr);
 
  private:
+  struct Scratch;
   SemanticConfig config_;
+  std::unique_ptr<Scratch> scratch_;
 };
 
 }  // namespace evidential_octomap

@@ -1,26 +1,44 @@
-// EvidentialOcTree in ColorOcTree.cpp's order: node part (header only), tree part, static member.
-// The file format (readData / writeData) is in ot_format.cpp.
+// EvidentialOcTree in ColorOcTree.cpp's order: node part, tree part, static member. The batched
+// scan update is in tree_update.cpp, the file format in ot_format.cpp.
 #include "evidential_octomap/evidential_octree.h"
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <functional>
 #include <limits>
 #include <numeric>
-#include <sstream>
-#include <utility>
 #include <stdexcept>
+#include <utility>
 
 #include "evidential_octomap/scan_integrator.h"
+#include "payload_pool.h"
+#include "tree_edit.h"
 
 namespace evidential_octomap {
 
+// --- node ----------------------------------------------------------------------------------------
+
+EvidentialOcTreeNode* EvidentialOcTreeNode::addChild(unsigned i) {
+  if (!children) {
+    children = new octomap::AbstractOcTreeNode*[8];
+    std::fill_n(children, 8, nullptr);
+  }
+  auto* child = new EvidentialOcTreeNode();
+  children[i] = child;
+  return child;
+}
+
+void EvidentialOcTreeNode::deleteLeafChildren() {
+  for (unsigned i = 0; i < 8; ++i) delete static_cast<EvidentialOcTreeNode*>(children[i]);
+  delete[] children;
+  children = nullptr;
+}
+
 // --- construction and settings -----------------------------------------------------------------
 
-EvidentialOcTree::EvidentialOcTree(double resolution, int num_classes,
-                                   const SemanticConfig& config)
-    : OccupancyOcTreeBase<EvidentialOcTreeNode>(resolution) {
+EvidentialOcTree::EvidentialOcTree(double resolution, int num_classes, const SemanticConfig& config)
+    : OccupancyOcTreeBase<EvidentialOcTreeNode>(resolution),
+      pool_(std::make_unique<PayloadPool>(1)) {
   setNumClasses(num_classes);
   setConfig(config);
   evidential_octree_member_init_.ensureLinking();
@@ -38,7 +56,8 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
       num_classes_(rhs.num_classes_),
       class_names_(rhs.class_names_),
       config_(rhs.config_),
-      rule_(FusionRule::create(rhs.config_.rule, rhs.config_.sbki_prior)) {
+      rule_(FusionRule::create(rhs.config_.rule, rhs.config_.sbki_prior)),
+      pool_(std::make_unique<PayloadPool>(rhs.num_classes_)) {
   // OctoMap's own copy constructor slices derived nodes, so the nodes are copied here.
   clamping_thres_min = rhs.clamping_thres_min;
   clamping_thres_max = rhs.clamping_thres_max;
@@ -48,18 +67,14 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
   if (rhs.root) {
     root = new EvidentialOcTreeNode();
     tree_size = 1;
-    copySubtree(rhs, rhs.root, root);
+    Edit edit(pool_.get(), 1024);
+    copySubtree(rhs, rhs.root, root, edit);
+    commit(edit);
+    linkSummariesRecurs(root, 0);
   }
 }
 
-void EvidentialOcTree::copySubtree(const EvidentialOcTree& from, const EvidentialOcTreeNode* src,
-                                   EvidentialOcTreeNode* dst) {
-  dst->setValue(src->getValue());
-  if (src->hasSemantics()) std::copy_n(from.slot(src->payload_), num_classes_, payloadForUpdate(dst));
-  for (unsigned i = 0; i < 8; ++i) {
-    if (from.nodeChildExists(src, i)) copySubtree(from, from.getNodeChild(src, i), createNodeChild(dst, i));
-  }
-}
+EvidentialOcTree::~EvidentialOcTree() = default;
 
 void EvidentialOcTree::setNumClasses(int num_classes) {
   if (num_classes < 1 || num_classes > kMaxClasses) {
@@ -68,6 +83,7 @@ void EvidentialOcTree::setNumClasses(int num_classes) {
   }
   clear();
   num_classes_ = num_classes;
+  pool_->reset(num_classes);
   class_names_.clear();
   for (int c = 0; c < num_classes; ++c) class_names_.push_back("class_" + std::to_string(c));
 }
@@ -84,13 +100,16 @@ void EvidentialOcTree::setConfig(const SemanticConfig& config) {
   const std::string problem = config.problem();
   if (!problem.empty()) throw std::invalid_argument("semantic config: " + problem);
   auto rule = FusionRule::create(config.rule, config.sbki_prior);
-  const bool meaning_changes = config.rule != config_.rule || config.sbki_prior != config_.sbki_prior;
-  if (rule_ && meaning_changes && payload_count_ > 0) {
-    throw std::logic_error("cannot change the fusion rule of a map that holds semantic evidence ('" +
-                           config_.rule + "' -> '" + config.rule + "')");
+  const bool meaning_changes =
+      config.rule != config_.rule || config.sbki_prior != config_.sbki_prior;
+  if (rule_ && meaning_changes && numSemanticNodes() > 0) {
+    throw std::logic_error(
+        "cannot change the fusion rule of a map that holds semantic evidence ('" + config_.rule +
+        "' -> '" + config.rule + "')");
   }
   config_ = config;
   rule_ = std::move(rule);
+  integrator_.reset();
 }
 
 SensorModel EvidentialOcTree::sensorModel() const {
@@ -115,7 +134,8 @@ InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& poin
                                                  const octomap::point3d& origin_W,
                                                  EvidentialOcTree* unobserved) {
   if (unobserved) checkCompatible(*unobserved, "unobserved evidence");
-  return ScanIntegrator(config_).integrate(points_W, evidence, origin_W, this, unobserved);
+  if (!integrator_) integrator_ = std::make_unique<ScanIntegrator>(config_);
+  return integrator_->integrate(points_W, evidence, origin_W, this, unobserved);
 }
 
 InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& points_S,
@@ -126,9 +146,14 @@ InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& poin
   return insertSemanticScan(points_W, evidence, T_W_S.trans());
 }
 
+float* EvidentialOcTree::slot(uint32_t index) { return pool_->slot(index); }
+const float* EvidentialOcTree::slot(uint32_t index) const { return pool_->slot(index); }
+
 const float* EvidentialOcTree::payload(const EvidentialOcTreeNode* node) const {
   return (node && node->hasSemantics()) ? slot(node->payload_) : nullptr;
 }
+
+size_t EvidentialOcTree::numSemanticNodes() const { return pool_->inUse(); }
 
 VoxelOpinion EvidentialOcTree::opinion(const EvidentialOcTreeNode* node) const {
   if (const float* data = payload(node)) return rule_->readout(data, num_classes_);
@@ -152,37 +177,86 @@ VoxelOpinion EvidentialOcTree::query(const octomap::OcTreeKey& key, unsigned dep
   return opinion(search(key, depth));
 }
 
-// --- editing -------------------------------------------------------------------------------------
+// --- edits: every change of nodes and payloads goes through an Edit ------------------------------
 
-uint32_t EvidentialOcTree::allocatePayload() {
-  uint32_t index;
-  if (!free_payloads_.empty()) {
-    index = free_payloads_.back();
-    free_payloads_.pop_back();
-  } else {
-    const size_t slots = payloads_.size() / num_classes_;
-    if (slots >= EvidentialOcTreeNode::kNoPayload) throw std::length_error("payload pool is full");
-    index = static_cast<uint32_t>(slots);
-    payloads_.resize(payloads_.size() + num_classes_);
+void EvidentialOcTree::commit(Edit& edit) {
+  tree_size = static_cast<size_t>(static_cast<long long>(tree_size) + edit.nodes);
+  edit.nodes = 0;
+  edit.slots.flush();
+  size_changed = true;
+}
+
+EvidentialOcTreeNode* EvidentialOcTree::createChild(EvidentialOcTreeNode* node, unsigned i,
+                                                    Edit& edit) {
+  ++edit.nodes;
+  return node->addChild(i);
+}
+
+float* EvidentialOcTree::leafPayload(EvidentialOcTreeNode* leaf, Edit& edit) {
+  if (!leaf->hasSemantics()) {
+    leaf->payload_ = edit.slots.allocate();
+    std::fill_n(slot(leaf->payload_), num_classes_, rule_->prior());
   }
-  std::fill_n(slot(index), num_classes_, rule_->prior());
-  ++payload_count_;
-  return index;
+  return slot(leaf->payload_);
 }
 
-void EvidentialOcTree::releasePayload(EvidentialOcTreeNode* node) {
-  if (!node->hasSemantics()) return;
-  free_payloads_.push_back(node->payload_);
-  node->payload_ = EvidentialOcTreeNode::kNoPayload;
-  --payload_count_;
+void EvidentialOcTree::releaseLeafPayload(EvidentialOcTreeNode* leaf, Edit& edit) {
+  if (!leaf->hasSemantics()) return;
+  edit.slots.release(leaf->payload_);
+  leaf->payload_ = EvidentialOcTreeNode::kNoPayload;
 }
 
-float* EvidentialOcTree::payloadForUpdate(EvidentialOcTreeNode* node) {
-  if (!node->hasSemantics()) node->payload_ = allocatePayload();
-  return slot(node->payload_);
+// A pruned leaf becomes eight equal leaves; child 0 keeps the slot, so anything that named it
+// (the summaries above) still reads the same payload.
+void EvidentialOcTree::expandLeaf(EvidentialOcTreeNode* node, Edit& edit) {
+  for (unsigned i = 0; i < 8; ++i) {
+    EvidentialOcTreeNode* child = createChild(node, i, edit);
+    child->copyData(*node);
+    if (!node->hasSemantics()) continue;
+    if (i == 0) {
+      child->payload_ = node->payload_;
+    } else {
+      child->payload_ = edit.slots.allocate();
+      std::copy_n(slot(node->payload_), num_classes_, slot(child->payload_));
+    }
+  }
 }
 
-void EvidentialOcTree::clearPayload(EvidentialOcTreeNode* node) { releasePayload(node); }
+// Eight equal leaves become one; it keeps child 0's slot (the one a summary names on ties).
+bool EvidentialOcTree::pruneChildren(EvidentialOcTreeNode* node, Edit& edit) {
+  if (!isNodeCollapsible(node)) return false;
+  EvidentialOcTreeNode* first = getNodeChild(node, 0);
+  node->copyData(*first);
+  node->payload_ = first->payload_;
+  first->payload_ = EvidentialOcTreeNode::kNoPayload;
+  for (unsigned i = 1; i < 8; ++i) releaseLeafPayload(getNodeChild(node, i), edit);
+  node->deleteLeafChildren();
+  edit.nodes -= 8;
+  return true;
+}
+
+// --- the editing API -----------------------------------------------------------------------------
+
+float* EvidentialOcTree::payloadForUpdate(EvidentialOcTreeNode* leaf) {
+  if (nodeHasChildren(leaf)) {
+    throw std::invalid_argument(
+        "payloadForUpdate needs a leaf; inner summaries follow their leaves (updateInnerNodes)");
+  }
+  Edit edit(pool_.get(), 1);
+  float* data = leafPayload(leaf, edit);
+  commit(edit);
+  return data;
+}
+
+void EvidentialOcTree::clearPayload(EvidentialOcTreeNode* node) {
+  if (nodeHasChildren(node)) {  // a summary only names a leaf's slot
+    node->payload_ = EvidentialOcTreeNode::kNoPayload;
+    return;
+  }
+  Edit edit(pool_.get(), 1);
+  releaseLeafPayload(node, edit);
+  commit(edit);
+}
 
 EvidentialOcTreeNode* EvidentialOcTree::leafForUpdate(const octomap::OcTreeKey& key, bool create) {
   bool created = false;
@@ -209,19 +283,7 @@ EvidentialOcTreeNode* EvidentialOcTree::leafForUpdate(const octomap::OcTreeKey& 
   return node;
 }
 
-void EvidentialOcTree::updateInnerNodes() {
-  if (root) updateInnerRecurs(root, 0);
-}
-
-void EvidentialOcTree::updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth) {
-  if (!nodeHasChildren(node)) return;
-  if (depth + 1 < tree_depth) {
-    for (unsigned i = 0; i < 8; ++i) {
-      if (nodeChildExists(node, i)) updateInnerRecurs(getNodeChild(node, i), depth + 1);
-    }
-  }
-  updateInnerNode(node);
-}
+// --- inner nodes -------------------------------------------------------------------------------
 
 const EvidentialOcTreeNode* EvidentialOcTree::richestChild(const EvidentialOcTreeNode* node) const {
   const EvidentialOcTreeNode* richest = nullptr;
@@ -240,164 +302,84 @@ const EvidentialOcTreeNode* EvidentialOcTree::richestChild(const EvidentialOcTre
   return richest;
 }
 
-void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node) {
+// An inner node names the slot of its richest child, so its summary is that leaf's payload.
+void EvidentialOcTree::linkSummary(EvidentialOcTreeNode* node) const {
   const EvidentialOcTreeNode* richest = richestChild(node);
+  node->payload_ = richest ? richest->payload_ : EvidentialOcTreeNode::kNoPayload;
+}
+
+void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node, Edit& edit) {
+  if (pruneChildren(node, edit)) return;
   node->updateOccupancyChildren();
-  if (richest) {
-    float* dst = payloadForUpdate(node);  // may reallocate the pool: read the source after it
-    std::copy_n(slot(richest->payload_), num_classes_, dst);
-  } else {
-    releasePayload(node);
-  }
-  pruneNode(node);
+  linkSummary(node);
 }
 
-// --- batched scan update ---------------------------------------------------------------------
-
-namespace {
-uint64_t spreadBits(uint64_t v) {  // the 16 bits of v to every third bit
-  v &= 0xFFFF;
-  v = (v | (v << 16)) & 0x0000FF0000FFull;
-  v = (v | (v << 8)) & 0x00F00F00F00Full;
-  v = (v | (v << 4)) & 0x0C30C30C30C3ull;
-  v = (v | (v << 2)) & 0x249249249249ull;
-  return v;
-}
-// Morton code with OctoMap's child order (z, y, x from most to least significant), so that a
-// sorted run of keys is also sorted by child index at every depth.
-uint64_t mortonCode(const octomap::OcTreeKey& k) {
-  return spreadBits(k[2]) << 2 | spreadBits(k[1]) << 1 | spreadBits(k[0]);
-}
-// Stable LSD radix sort on the 48-bit Morton code: three 16-bit passes, about twice as fast as
-// std::sort for the ~1.5 M updates of a scan (bench/README.md).
-void radixSortByCode(std::vector<std::pair<uint64_t, uint32_t>>& items) {
-  std::vector<std::pair<uint64_t, uint32_t>> buffer(items.size());
-  std::vector<size_t> offsets(1 << 16);
-  for (int shift = 0; shift < 48; shift += 16) {
-    std::fill(offsets.begin(), offsets.end(), 0);
-    for (const auto& item : items) ++offsets[(item.first >> shift) & 0xFFFF];
-    size_t sum = 0;
-    for (size_t& offset : offsets) sum += std::exchange(offset, sum);
-    for (const auto& item : items) buffer[offsets[(item.first >> shift) & 0xFFFF]++] = item;
-    items.swap(buffer);
-  }
-}
-}  // namespace
-
-struct EvidentialOcTree::UpdateBatch {
-  const std::vector<double>& increments;
-  bool create_semantic_leaves;
-};
-
-size_t EvidentialOcTree::applyUpdates(std::vector<VoxelUpdate> updates,
-                                      const std::vector<double>& increments,
-                                      bool create_semantic_leaves) {
-  if (updates.empty()) return 0;
-  std::vector<std::pair<uint64_t, uint32_t>> order(updates.size());
-  for (size_t i = 0; i < updates.size(); ++i) order[i] = {mortonCode(updates[i].key), uint32_t(i)};
-  radixSortByCode(order);
-  // Sorted and merged per key: occupancy from the ray set, increments from the kernel.
-  std::vector<VoxelUpdate> sorted;
-  sorted.reserve(updates.size());
-  for (size_t i = 0; i < order.size(); ++i) {
-    const VoxelUpdate& u = updates[order[i].second];
-    if (i > 0 && order[i].first == order[i - 1].first) {
-      VoxelUpdate& merged = sorted.back();
-      if (u.occupancy != 0) {  // 0 means "no occupancy update", not a value between miss and hit
-        merged.occupancy = merged.occupancy == 0 ? u.occupancy : std::max(merged.occupancy, u.occupancy);
-      }
-      if (u.increments != VoxelUpdate::kNoIncrements) merged.increments = u.increments;
-    } else {
-      sorted.push_back(u);
-    }
-  }
-  bool is_new = false;
-  if (!root) {
-    root = new EvidentialOcTreeNode();
-    ++tree_size;
-    is_new = true;
-  }
-  const UpdateBatch batch{increments, create_semantic_leaves};
-  const size_t changed =
-      applyUpdatesRecurs(root, 0, is_new, sorted.data(), sorted.data() + sorted.size(), batch);
-  size_changed = true;
-  return changed;
+void EvidentialOcTree::updateInnerNodes() {
+  if (!root) return;
+  Edit edit(pool_.get(), 1);
+  updateInnerRecurs(root, 0, edit);
+  commit(edit);
 }
 
-size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth,
-                                            bool is_new, const VoxelUpdate* begin,
-                                            const VoxelUpdate* end, const UpdateBatch& batch) {
-  if (depth == tree_depth) {  // one voxel, one merged update
-    if (begin->occupancy != 0) {
-      updateNodeLogOdds(node, begin->occupancy > 0 ? prob_hit_log : prob_miss_log);
+void EvidentialOcTree::updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth, Edit& edit) {
+  if (!nodeHasChildren(node)) return;
+  if (depth + 1 < tree_depth) {
+    for (unsigned i = 0; i < 8; ++i) {
+      if (nodeChildExists(node, i)) updateInnerRecurs(getNodeChild(node, i), depth + 1, edit);
     }
-    if (begin->increments == VoxelUpdate::kNoIncrements) return 0;
-    float* payload = payloadForUpdate(node);
-    const double* add = &batch.increments[size_t(begin->increments) * num_classes_];
-    for (int c = 0; c < num_classes_; ++c) payload[c] += static_cast<float>(add[c]);
-    return 1;
   }
-  if (!is_new && !nodeHasChildren(node)) {
-    // A pruned block: misses on a block at the lower clamp, or hits on one at the upper clamp,
-    // change nothing (OctoMap's early abort); anything else splits it.
-    const bool at_min = node->getLogOdds() <= clamping_thres_min;
-    const bool at_max = node->getLogOdds() >= clamping_thres_max;
-    bool unchanged = at_min || at_max;
-    for (const VoxelUpdate* u = begin; unchanged && u != end; ++u) {
-      unchanged = u->increments == VoxelUpdate::kNoIncrements &&
-                  ((at_min && u->occupancy < 0) || (at_max && u->occupancy > 0));
-    }
-    if (unchanged) return 0;
-    expandNode(node);
+  updateInnerNode(node, edit);
+}
+
+void EvidentialOcTree::linkSummariesRecurs(EvidentialOcTreeNode* node, unsigned depth) const {
+  if (!nodeHasChildren(node)) return;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (nodeChildExists(node, i)) linkSummariesRecurs(getNodeChild(node, i), depth + 1);
   }
-  const int level = static_cast<int>(tree_depth - 1 - depth);
-  size_t changed = 0;
-  for (const VoxelUpdate* first = begin; first != end;) {
-    const unsigned child = octomap::computeChildIdx(first->key, level);
-    const VoxelUpdate* last = first;
-    bool needs_leaf = false;
-    while (last != end && octomap::computeChildIdx(last->key, level) == child) {
-      needs_leaf |= last->occupancy != 0 || batch.create_semantic_leaves;
-      ++last;
-    }
-    bool created = false;
-    if (!nodeChildExists(node, child) && needs_leaf) {
-      createNodeChild(node, child);
-      created = true;
-    }
-    if (nodeChildExists(node, child)) {
-      changed += applyUpdatesRecurs(getNodeChild(node, child), depth + 1, created, first, last, batch);
-    }
-    first = last;
-  }
-  if (nodeHasChildren(node)) updateInnerNode(node);
-  return changed;
+  linkSummary(node);
 }
 
 void EvidentialOcTree::compactPayloads() {
-  std::vector<float> packed;
-  packed.reserve(payload_count_ * num_classes_);
-  std::vector<EvidentialOcTreeNode*> stack;
-  if (root) stack.push_back(root);
-  while (!stack.empty()) {
-    EvidentialOcTreeNode* node = stack.back();
-    stack.pop_back();
-    if (node->hasSemantics()) {
-      const float* data = slot(node->payload_);
-      node->payload_ = static_cast<uint32_t>(packed.size() / num_classes_);
-      packed.insert(packed.end(), data, data + num_classes_);
-    }
-    for (unsigned i = 0; i < 8; ++i) {
-      if (nodeChildExists(node, i)) stack.push_back(getNodeChild(node, i));
+  auto packed = std::make_unique<PayloadPool>(num_classes_);
+  {
+    Edit edit(packed.get(), 1024);
+    std::vector<EvidentialOcTreeNode*> stack;
+    if (root) stack.push_back(root);
+    while (!stack.empty()) {
+      EvidentialOcTreeNode* node = stack.back();
+      stack.pop_back();
+      if (!nodeHasChildren(node) && node->hasSemantics()) {
+        const uint32_t index = edit.slots.allocate();
+        std::copy_n(slot(node->payload_), num_classes_, packed->slot(index));
+        node->payload_ = index;
+      }
+      for (unsigned i = 0; i < 8; ++i) {
+        if (nodeChildExists(node, i)) stack.push_back(getNodeChild(node, i));
+      }
     }
   }
-  payloads_.swap(packed);
-  payloads_.shrink_to_fit();
-  free_payloads_.clear();
-  payload_count_ = payloads_.size() / num_classes_;
+  pool_.swap(packed);
+  if (root) linkSummariesRecurs(root, 0);
 }
 
-// --- merge ---------------------------------------------------------------------------------------
+// --- copy and merge
+// --------------------------------------------------------------------------------
+
+void EvidentialOcTree::copySubtree(const EvidentialOcTree& from, const EvidentialOcTreeNode* src,
+                                   EvidentialOcTreeNode* dst, Edit& edit) {
+  dst->setValue(src->getValue());
+  if (!from.nodeHasChildren(src)) {
+    if (src->hasSemantics()) {
+      std::copy_n(from.slot(src->payload_), num_classes_, leafPayload(dst, edit));
+    }
+    return;
+  }
+  for (unsigned i = 0; i < 8; ++i) {
+    if (from.nodeChildExists(src, i)) {
+      copySubtree(from, from.getNodeChild(src, i), createChild(dst, i, edit), edit);
+    }
+  }
+}
 
 namespace {
 float clampLogOdds(float value, float lo, float hi) { return std::min(std::max(value, lo), hi); }
@@ -449,45 +431,49 @@ void EvidentialOcTree::addEvidence(const EvidentialOcTree& evidence, EvidentialO
 void EvidentialOcTree::merge(const EvidentialOcTree& other) {
   checkCompatible(other, "merge");
   if (!other.root) return;
+  Edit edit(pool_.get(), 1024);
   if (!root) {
     root = new EvidentialOcTreeNode();
     tree_size = 1;
-    copySubtree(other, other.root, root);
+    copySubtree(other, other.root, root, edit);
+    commit(edit);
+    linkSummariesRecurs(root, 0);
     return;
   }
   // Leaf-level fusion: log-odds add (clamped), payload increments add. Both are commutative.
   auto fuseLeaf = [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src) {
     dst->setLogOdds(clampLogOdds(dst->getLogOdds() + src->getLogOdds(), clamping_thres_min,
                                  clamping_thres_max));
-    if (src->hasSemantics()) addPayload(payloadForUpdate(dst), other.slot(src->payload_));
+    if (src->hasSemantics()) addPayload(leafPayload(dst, edit), other.slot(src->payload_));
   };
   // Applies src (a leaf) to every leaf below dst; children dst lacks become copies of src.
-  std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*, unsigned)> spread =
-      [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src, unsigned depth) {
+  std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*)> spread =
+      [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src) {
         if (!nodeHasChildren(dst)) return fuseLeaf(dst, src);
         for (unsigned i = 0; i < 8; ++i) {
           if (nodeChildExists(dst, i)) {
-            spread(getNodeChild(dst, i), src, depth + 1);
+            spread(getNodeChild(dst, i), src);
           } else {
-            copySubtree(other, src, createNodeChild(dst, i));
+            copySubtree(other, src, createChild(dst, i, edit), edit);
           }
         }
       };
-  std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*, unsigned)> mergeRecurs =
-      [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src, unsigned depth) {
-        if (!other.nodeHasChildren(src)) return spread(dst, src, depth);
-        if (!nodeHasChildren(dst)) expandNode(dst);  // dst is a (pruned) leaf: refine it
+  std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*)> mergeRecurs =
+      [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src) {
+        if (!other.nodeHasChildren(src)) return spread(dst, src);
+        if (!nodeHasChildren(dst)) expandLeaf(dst, edit);  // dst is a (pruned) leaf: refine it
         for (unsigned i = 0; i < 8; ++i) {
           if (!other.nodeChildExists(src, i)) continue;
           if (nodeChildExists(dst, i)) {
-            mergeRecurs(getNodeChild(dst, i), other.getNodeChild(src, i), depth + 1);
+            mergeRecurs(getNodeChild(dst, i), other.getNodeChild(src, i));
           } else {
-            copySubtree(other, other.getNodeChild(src, i), createNodeChild(dst, i));
+            copySubtree(other, other.getNodeChild(src, i), createChild(dst, i, edit), edit);
           }
         }
       };
-  mergeRecurs(root, other.root, 0);
-  updateInnerNodes();
+  mergeRecurs(root, other.root);
+  updateInnerRecurs(root, 0, edit);
+  commit(edit);
 }
 
 // --- OctoMap overrides -----------------------------------------------------------------------
@@ -512,39 +498,30 @@ bool EvidentialOcTree::isNodeCollapsible(const EvidentialOcTreeNode* node) const
 }
 
 void EvidentialOcTree::expandNode(EvidentialOcTreeNode* node) {
-  OccupancyOcTreeBase<EvidentialOcTreeNode>::expandNode(node);
-  if (!node->hasSemantics()) return;
-  for (unsigned i = 0; i < 8; ++i) {
-    EvidentialOcTreeNode* child = getNodeChild(node, i);
-    float* dst = payloadForUpdate(child);  // may reallocate: read the parent's slot after it
-    std::copy_n(slot(node->payload_), num_classes_, dst);
-  }
+  Edit edit(pool_.get(), 8);
+  expandLeaf(node, edit);
+  commit(edit);
 }
 
 bool EvidentialOcTree::pruneNode(EvidentialOcTreeNode* node) {
-  if (!isNodeCollapsible(node)) return false;
-  EvidentialOcTreeNode* first = getNodeChild(node, 0);
-  if (first->hasSemantics()) {
-    float* dst = payloadForUpdate(node);
-    std::copy_n(slot(first->payload_), num_classes_, dst);
-  } else {
-    releasePayload(node);
-  }
-  for (unsigned i = 0; i < 8; ++i) releasePayload(getNodeChild(node, i));
-  // Children are now identical and payload-free: the base deletes them and copies occupancy.
-  return OccupancyOcTreeBase<EvidentialOcTreeNode>::pruneNode(node);
+  Edit edit(pool_.get(), 1);
+  const bool pruned = pruneChildren(node, edit);
+  commit(edit);
+  return pruned;
+}
+
+void EvidentialOcTree::prune() {
+  OccupancyOcTreeBase<EvidentialOcTreeNode>::prune();
+  if (root) linkSummariesRecurs(root, 0);  // summaries may name slots pruning released
 }
 
 void EvidentialOcTree::clear() {
   OccupancyOcTreeBase<EvidentialOcTreeNode>::clear();
-  payloads_.clear();
-  free_payloads_.clear();
-  payload_count_ = 0;
+  if (pool_) pool_->reset(num_classes_);
 }
 
 size_t EvidentialOcTree::memoryUsage() const {
-  return OccupancyOcTreeBase<EvidentialOcTreeNode>::memoryUsage() +
-         payloads_.capacity() * sizeof(float) + free_payloads_.capacity() * sizeof(uint32_t);
+  return OccupancyOcTreeBase<EvidentialOcTreeNode>::memoryUsage() + pool_->bytes();
 }
 
 // --- registration with AbstractOcTree (the ColorOcTree pattern) -----------------------------

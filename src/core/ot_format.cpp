@@ -1,18 +1,26 @@
 // The data section of an EvidentialOcTree .ot file (what AbstractOcTree::write puts after OctoMap's
-// text header "id / size / res / data"). Little-endian, format 2:
+// text header "id / size / res / data"). Little-endian, format 3:
 //
 //   u32 magic "EVEM", u32 format, f64 resolution (2+), u32 C, C x string class name,
-//   string rule, string downsampling (2+), string kernel_distance (2+), 7 x f64 (length_scale sigma0 beta gamma drop_percent ds_multiplier max_range),
-//   5 x u8 flags, f32 sbki_prior, 5 x f32 occupancy log-odds (clamp min, clamp max, hit, miss,
-//   threshold), u64 node count, nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of
-//   every byte from the magic to the end magic.
-//   node: f32 log-odds, u8 child mask, u8 has-payload, [C x f32 payload]
+//   string rule, string downsampling (2+), string kernel_distance (2+), 7 x f64 (length_scale
+//   sigma0 beta gamma drop_percent ds_multiplier max_range), 5 x u8 flags, f32 sbki_prior,
+//   5 x f32 occupancy log-odds (clamp min, clamp max, hit, miss, threshold), u64 node count,
+//   nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of every byte from the magic to
+//   the end magic.
+//   node (3): f32 log-odds, u8 child mask, and for a leaf a u8 payload tag:
+//             0 no payload; 1 C x f32; 2 + n: n x (u8 class, f32 value), the classes whose value
+//             differs (in its bits) from the rule's prior, in increasing order. The writer takes
+//             the shorter form. Inner nodes store no payload: their summary (the richest
+//             child's) is derived again on reading.
+//   node (1, 2): f32 log-odds, u8 child mask, u8 has-payload, [C x f32 payload], inner nodes too
 //   string: u32 length (<= 4096), bytes
 //
-// Format 1 (before the CRC) has no resolution field and no CRC; it is still read. OctoMap's own
-// header prints `res` with the stream's precision (6 digits unless the writer sets more), so
-// format 2 keeps the exact resolution in the section and the reader restores it.
+// Format 1 (before the CRC) has no resolution field and no CRC; formats 1 and 2 are still read.
+// OctoMap's own header prints `res` with the stream's precision (6 digits unless the writer sets
+// more), so formats 2+ keep the exact resolution in the section and the reader restores it.
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -20,6 +28,8 @@
 
 #include "crc32.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "payload_pool.h"
+#include "tree_edit.h"
 
 namespace evidential_octomap {
 namespace {
@@ -27,8 +37,14 @@ namespace {
 constexpr uint32_t kFileMagic = 0x4D455645u;  // "EVEM"
 constexpr uint32_t kFileEndMagic = 0x444E4545u;
 constexpr uint32_t kFormatWithoutCrc = 1;
-constexpr uint32_t kFormat = 2;
+constexpr uint32_t kFormatWithInnerPayloads = 2;
+constexpr uint32_t kFormat = 3;
 constexpr uint32_t kMaxNameLength = 4096;
+constexpr uint8_t kNoPayloadTag = 0;
+constexpr uint8_t kDenseTag = 1;
+constexpr uint8_t kSparseTag = 2;  // + number of (class, value) pairs
+
+bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
 
 // Thrown inside readData only; turned into read_error_ there.
 struct FormatError : std::runtime_error {
@@ -50,12 +66,16 @@ std::string storedParameterProblem(double resolution, const float (&occupancy)[5
 
 }  // namespace
 
+// Collects the section in memory and hands it to the stream in large writes, with its running
+// CRC: millions of small ostream::write calls cost more than the encoding.
 class EvidentialOcTree::SectionWriter {
  public:
-  explicit SectionWriter(std::ostream& s) : s_(s) {}
+  explicit SectionWriter(std::ostream& s) : s_(s) { buffer_.reserve(kFlushBytes + 4096); }
+  ~SectionWriter() { flush(); }
   void bytes(const void* data, size_t size) {
-    s_.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
-    crc_ = crc32Update(crc_, data, size);
+    const char* from = static_cast<const char*>(data);
+    buffer_.insert(buffer_.end(), from, from + size);
+    if (buffer_.size() >= kFlushBytes) flush();
   }
   template <typename T>
   void pod(const T& value) {
@@ -65,10 +85,20 @@ class EvidentialOcTree::SectionWriter {
     pod(static_cast<uint32_t>(text.size()));
     bytes(text.data(), text.size());
   }
-  uint32_t crc() const { return crc_; }
+  uint32_t crc() {
+    flush();
+    return crc_;
+  }
+  void flush() {
+    crc_ = crc32Update(crc_, buffer_.data(), buffer_.size());
+    s_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+    buffer_.clear();
+  }
 
  private:
+  static constexpr size_t kFlushBytes = 1 << 16;
   std::ostream& s_;
+  std::vector<char> buffer_;
   uint32_t crc_ = 0;
 };
 
@@ -113,15 +143,6 @@ std::string EvidentialOcTree::innerNodeProblem(const EvidentialOcTreeNode* node)
     return "an inner node's log-odds " + std::to_string(node->getLogOdds()) +
            " are not its children's maximum " + std::to_string(node->getMaxChildLogOdds());
   }
-  const EvidentialOcTreeNode* richest = richestChild(node);
-  if (!richest) {
-    return node->hasSemantics() ? "an inner node holds evidence none of its children holds" : "";
-  }
-  if (!node->hasSemantics() ||
-      !std::equal(slot(node->payload_), slot(node->payload_) + num_classes_,
-                  slot(richest->payload_))) {
-    return "an inner node's evidence is not its richest child's";
-  }
   return "";
 }
 
@@ -138,10 +159,11 @@ std::ostream& EvidentialOcTree::writeData(std::ostream& s) const {
   SectionWriter out(s);
   writeHeader(out);
   out.pod(static_cast<uint64_t>(tree_size));
-  if (root && !writeNodesRecurs(root, out)) {
+  if (root && !writeNodes(root, out)) {
+    out.flush();
     OCTOMAP_ERROR_STR(
         "EvidentialOcTree: not written: inner nodes are stale (call "
-        "updateInnerNodes() after lazy_eval updates or deleteNode)");
+        "updateInnerNodes() after lazy_eval updates)");
     s.setstate(std::ios::failbit);
     return s;
   }
@@ -175,23 +197,47 @@ void EvidentialOcTree::writeHeader(SectionWriter& out) const {
   }
 }
 
-// Returns false (and stops) at the first inner node that disagrees with its children: the reader
-// would refuse the file.
-bool EvidentialOcTree::writeNodesRecurs(const EvidentialOcTreeNode* node,
-                                        SectionWriter& out) const {
-  uint8_t children = 0;
-  for (unsigned i = 0; i < 8; ++i) {
-    if (nodeChildExists(node, i)) children |= static_cast<uint8_t>(1u << i);
-  }
-  if (children != 0 && !innerNodeProblem(node).empty()) return false;
-  out.pod(node->getValue());
-  out.pod(children);
-  out.pod(static_cast<uint8_t>(node->hasSemantics()));
-  if (node->hasSemantics()) out.bytes(slot(node->payload_), sizeof(float) * num_classes_);
-  for (unsigned i = 0; i < 8; ++i) {
-    if ((children & (1u << i)) && !writeNodesRecurs(getNodeChild(node, i), out)) return false;
+// Depth first, child 0 first. Returns false (and stops) at the first inner node whose occupancy
+// disagrees with its children: the reader would refuse the file.
+bool EvidentialOcTree::writeNodes(const EvidentialOcTreeNode* root_node, SectionWriter& out) const {
+  const float prior = rule_->prior();
+  std::vector<const EvidentialOcTreeNode*> stack{root_node};
+  while (!stack.empty()) {
+    const EvidentialOcTreeNode* node = stack.back();
+    stack.pop_back();
+    uint8_t children = 0;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (nodeChildExists(node, i)) children |= static_cast<uint8_t>(1u << i);
+    }
+    if (children != 0 && !innerNodeProblem(node).empty()) return false;
+    out.pod(node->getValue());
+    out.pod(children);
+    if (children == 0) writePayload(node, prior, out);
+    for (int i = 7; i >= 0; --i) {
+      if (children & (1u << i)) stack.push_back(getNodeChild(node, static_cast<unsigned>(i)));
+    }
   }
   return true;
+}
+
+// A leaf's payload tag and payload, in the shorter form (format 3).
+void EvidentialOcTree::writePayload(const EvidentialOcTreeNode* leaf, float prior,
+                                    SectionWriter& out) const {
+  if (!leaf->hasSemantics()) return out.pod(kNoPayloadTag);
+  const float* payload = slot(leaf->payload_);
+  int differing = 0;
+  for (int c = 0; c < num_classes_; ++c) differing += sameBits(payload[c], prior) ? 0 : 1;
+  if (5 * differing < 4 * num_classes_ && differing <= 255 - kSparseTag) {  // 5 B vs 4 B a class
+    out.pod(static_cast<uint8_t>(kSparseTag + differing));
+    for (int c = 0; c < num_classes_; ++c) {
+      if (sameBits(payload[c], prior)) continue;
+      out.pod(static_cast<uint8_t>(c));
+      out.pod(payload[c]);
+    }
+  } else {
+    out.pod(kDenseTag);
+    out.bytes(payload, sizeof(float) * num_classes_);
+  }
 }
 
 // --- reading ---------------------------------------------------------------------------------
@@ -206,21 +252,28 @@ std::istream& EvidentialOcTree::readData(std::istream& s) {
       throw FormatError("no EvidentialOcTree semantic header (corrupt or foreign data)");
     }
     const uint32_t version = in.pod<uint32_t>("semantic header");
-    if (version != kFormat && version != kFormatWithoutCrc) {
+    if (version < kFormatWithoutCrc || version > kFormat) {
       throw FormatError("unsupported EvidentialOcTree file format " + std::to_string(version) +
-                        " (this library reads formats 1 and 2)");
+                        " (this library reads formats 1 to 3)");
     }
     readHeader(in, version);
     const uint64_t expected_nodes = in.pod<uint64_t>("node count");
     if (expected_nodes > 0) {
       root = new EvidentialOcTreeNode();
       tree_size = 1;
-      readNodesRecurs(root, 0, in);
+      Edit edit(pool_.get(), 1024);
+      try {
+        readNodesRecurs(root, 0, version, in, edit);
+      } catch (...) {
+        commit(edit);
+        throw;
+      }
+      commit(edit);
     }
     if (tree_size != expected_nodes || in.pod<uint32_t>("end marker") != kFileEndMagic) {
       throw FormatError("node data does not match its header (corrupt or truncated)");
     }
-    if (version >= kFormat) {
+    if (version >= kFormatWithInnerPayloads) {
       const uint32_t computed = in.crc();
       uint32_t stored = 0;
       if (!s.read(reinterpret_cast<char*>(&stored), sizeof(stored))) {
@@ -239,7 +292,7 @@ std::istream& EvidentialOcTree::readData(std::istream& s) {
 }
 
 void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
-  if (version >= kFormat) {
+  if (version >= kFormatWithInnerPayloads) {
     // OctoMap's text header may have rounded `res`; the section has it exactly. Anything more
     // than rounding apart means one of them is corrupt.
     const double exact = in.pod<double>("resolution");
@@ -259,7 +312,7 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
   for (auto& name : names) name = in.string("class names");
   SemanticConfig config;
   config.rule = in.string("rule name");
-  if (version >= kFormat) {  // format 1 predates them: their defaults
+  if (version >= kFormatWithInnerPayloads) {  // format 1 predates them: their defaults
     config.downsampling = in.string("downsampling");
     config.kernel_distance = in.string("kernel distance");
   }
@@ -287,35 +340,72 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
   occ_prob_thres_log = occupancy[4];
 }
 
-void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth,
-                                       SectionReader& in) {
+void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, uint32_t version,
+                                       SectionReader& in, Edit& edit) {
   const float value = in.pod<float>("node data");
   const uint8_t children = in.pod<uint8_t>("node data");
-  const uint8_t has_payload = in.pod<uint8_t>("node data");
   if (!std::isfinite(value)) throw FormatError("a node's log-odds are not finite");
-  if (has_payload > 1) throw FormatError("bad payload flag (corrupt node data)");
   if (depth == tree_depth && children != 0) {
     throw FormatError("a node lies deeper than the tree (corrupt node data)");
   }
   node->setValue(value);
-  if (has_payload) {
-    float* data = payloadForUpdate(node);
-    in.bytes(data, sizeof(float) * num_classes_, "node data");
-    // Every writer keeps payloads at or above the rule's prior (dempster: L >= 0); anything
-    // else reads out as NaN or negative beliefs.
-    const float prior = rule_->prior();
-    for (int c = 0; c < num_classes_; ++c) {
-      if (!std::isfinite(data[c]) || data[c] < prior) {
-        throw FormatError("a payload is not finite or below the rule's prior");
-      }
+  std::vector<float> summary;  // formats 1 and 2: the stored summary of an inner node
+  if (version < kFormat) {
+    const uint8_t has_payload = in.pod<uint8_t>("node data");
+    if (has_payload > 1) throw FormatError("bad payload flag (corrupt node data)");
+    if (has_payload && children != 0) {
+      summary.resize(num_classes_);
+      in.bytes(summary.data(), sizeof(float) * num_classes_, "node data");
+    } else if (has_payload) {
+      readPayload(node, kDenseTag, in, edit);
     }
+  } else if (children == 0) {
+    readPayload(node, in.pod<uint8_t>("node data"), in, edit);
   }
   for (unsigned i = 0; i < 8; ++i) {
-    if (children & (1u << i)) readNodesRecurs(createNodeChild(node, i), depth + 1, in);
+    if (children & (1u << i)) {
+      readNodesRecurs(createChild(node, i, edit), depth + 1, version, in, edit);
+    }
   }
-  if (children != 0) {
-    const std::string problem = innerNodeProblem(node);
-    if (!problem.empty()) throw FormatError(problem + " (corrupt node data)");
+  if (children == 0) return;
+  const std::string problem = innerNodeProblem(node);
+  if (!problem.empty()) throw FormatError(problem + " (corrupt node data)");
+  linkSummary(node);
+  if (version < kFormat) {  // the stored summary must be the one derived from the children
+    const float* derived = payload(node);
+    if ((derived == nullptr) != summary.empty() ||
+        (derived && !std::equal(summary.begin(), summary.end(), derived, sameBits))) {
+      throw FormatError(derived ? "an inner node's evidence is not its richest child's"
+                                : "an inner node holds evidence none of its children holds");
+    }
+  }
+}
+
+// A leaf's payload after its tag (kDenseTag for formats 1 and 2).
+void EvidentialOcTree::readPayload(EvidentialOcTreeNode* leaf, uint8_t tag, SectionReader& in,
+                                   Edit& edit) {
+  if (tag == kNoPayloadTag) return;
+  float* data = leafPayload(leaf, edit);  // filled with the prior
+  if (tag == kDenseTag) {
+    in.bytes(data, sizeof(float) * num_classes_, "node data");
+  } else {
+    int previous = -1;
+    for (int pair = 0; pair < tag - kSparseTag; ++pair) {
+      const uint8_t c = in.pod<uint8_t>("node data");
+      if (c <= previous || c >= num_classes_) {
+        throw FormatError("bad class in a sparse payload (corrupt node data)");
+      }
+      previous = c;
+      data[c] = in.pod<float>("node data");
+    }
+  }
+  // Every writer keeps payloads at or above the rule's prior (dempster: L >= 0); anything
+  // else reads out as NaN or negative beliefs.
+  const float prior = rule_->prior();
+  for (int c = 0; c < num_classes_; ++c) {
+    if (!std::isfinite(data[c]) || data[c] < prior) {
+      throw FormatError("a payload is not finite or below the rule's prior");
+    }
   }
 }
 

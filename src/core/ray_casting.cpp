@@ -3,130 +3,107 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <cstdint>
+#include <cmath>
+#include <limits>
 
 namespace evidential_octomap {
 namespace {
 
-uint64_t pack(const octomap::OcTreeKey& k) {
-  return (uint64_t(k[0]) << 32) | (uint64_t(k[1]) << 16) | uint64_t(k[2]);
-}
-octomap::OcTreeKey unpack(uint64_t v) {
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(v >> 32),
-                            static_cast<octomap::key_type>(v >> 16),
-                            static_cast<octomap::key_type>(v));
-}
-
-// Open-addressing set of packed keys; ~10x faster than std::unordered_set for the tens of
-// millions of ray keys a scan produces. Packed keys use 48 bits, so all-ones marks empty.
-class KeySet {
- public:
-  static constexpr uint64_t kEmpty = ~0ull;
-  explicit KeySet(size_t expected = 1024) { rehash(std::max<size_t>(64, expected * 2)); }
-
-  void insert(uint64_t key) {
-    if (2 * (size_ + 1) > slots_.size()) rehash(slots_.size() * 2);
-    size_t i = index(key);
-    while (slots_[i] != kEmpty) {
-      if (slots_[i] == key) return;
-      i = (i + 1) & mask_;
-    }
-    slots_[i] = key;
-    ++size_;
-  }
-  bool contains(uint64_t key) const {
-    size_t i = index(key);
-    while (slots_[i] != kEmpty) {
-      if (slots_[i] == key) return true;
-      i = (i + 1) & mask_;
-    }
+// Calls visit(key) for every key OctoMap's computeRayKeys(origin, end) returns, in the same
+// order: the same 3-D DDA (Amanatides & Woo) with the same float and double arithmetic, step
+// for step, so the voxels are bit-for-bit OctoMap's (test_ray_casting checks it ray by ray).
+// Written out here so that each cell goes straight into the brick set instead of a KeyRay.
+template <typename Visit>
+bool traceRay(const EvidentialOcTree& tree, const octomap::point3d& origin,
+              const octomap::point3d& end, Visit&& visit) {
+  octomap::OcTreeKey key_origin, key_end;
+  if (!tree.coordToKeyChecked(origin, key_origin) || !tree.coordToKeyChecked(end, key_end)) {
     return false;
   }
-  template <typename F>
-  void forEach(F&& f) const {
-    for (uint64_t v : slots_)
-      if (v != kEmpty) f(v);
-  }
-  size_t size() const { return size_; }
-
- private:
-  size_t index(uint64_t key) const { return (key * 0x9E3779B97F4A7C15ull) >> shift_; }
-  void rehash(size_t capacity) {
-    size_t pow2 = 64;
-    int bits = 6;
-    while (pow2 < capacity) {
-      pow2 <<= 1;
-      ++bits;
+  if (key_origin == key_end) return true;
+  visit(key_origin);
+  octomap::point3d direction = (end - origin);
+  const float length = (float)direction.norm();
+  direction /= length;
+  const double resolution = tree.getResolution();
+  int step[3];
+  double t_max[3];
+  double t_delta[3];
+  octomap::OcTreeKey current = key_origin;
+  for (unsigned i = 0; i < 3; ++i) {
+    if (direction(i) > 0.0) {
+      step[i] = 1;
+    } else if (direction(i) < 0.0) {
+      step[i] = -1;
+    } else {
+      step[i] = 0;
     }
-    std::vector<uint64_t> old(pow2, kEmpty);
-    old.swap(slots_);
-    mask_ = pow2 - 1;
-    shift_ = 64 - bits;
-    size_ = 0;
-    for (uint64_t v : old)
-      if (v != kEmpty) insert(v);
+    if (step[i] != 0) {
+      double voxel_border = tree.keyToCoord(current[i]);
+      voxel_border += (float)(step[i] * resolution * 0.5);
+      t_max[i] = (voxel_border - origin(i)) / direction(i);
+      t_delta[i] = resolution / std::fabs(direction(i));
+    } else {
+      t_max[i] = std::numeric_limits<double>::max();
+      t_delta[i] = std::numeric_limits<double>::max();
+    }
   }
-  std::vector<uint64_t> slots_;
-  size_t mask_ = 0;
-  int shift_ = 0;
-  size_t size_ = 0;
-};
+  while (true) {
+    unsigned dim;
+    if (t_max[0] < t_max[1]) {
+      dim = t_max[0] < t_max[2] ? 0 : 2;
+    } else {
+      dim = t_max[1] < t_max[2] ? 1 : 2;
+    }
+    current[dim] += step[dim];
+    t_max[dim] += t_delta[dim];
+    if (current == key_end) return true;
+    // Past the end point without reaching its voxel (rounding): OctoMap stops here too.
+    if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) return true;
+    visit(current);
+  }
+}
 
 }  // namespace
 
-ScanKeys castRays(const EvidentialOcTree& tree, const octomap::Pointcloud& points_W,
-                  const octomap::point3d& origin_W, double max_range, bool discretize,
-                  int threads) {
-  // Ray end points: every point, or one per end voxel (its centre) when discretizing.
-  std::vector<octomap::point3d> ends;
-  ends.reserve(points_W.size());
-  if (discretize) {
-    KeySet seen(points_W.size());
-    for (size_t i = 0; i < points_W.size(); ++i) {
-      const octomap::OcTreeKey key = tree.coordToKey(points_W.getPoint(i));
-      const size_t before = seen.size();
-      seen.insert(pack(key));
-      if (seen.size() != before) ends.push_back(tree.keyToCoord(key));
-    }
-  } else {
-    for (size_t i = 0; i < points_W.size(); ++i) ends.push_back(points_W.getPoint(i));
-  }
+bool rayKeys(const EvidentialOcTree& tree, const octomap::point3d& origin,
+             const octomap::point3d& end, std::vector<octomap::OcTreeKey>* keys) {
+  keys->clear();
+  return traceRay(tree, origin, end, [&](const octomap::OcTreeKey& key) { keys->push_back(key); });
+}
 
-  std::vector<KeySet> free_sets(threads, KeySet(1 << 20));
-  std::vector<std::vector<uint64_t>> occupied_lists(threads);
+void castRays(const EvidentialOcTree& tree, const std::vector<octomap::point3d>& points_W,
+              const octomap::point3d& origin_W, double max_range, bool discretize,
+              std::vector<VoxelBricks>* per_thread) {
+  const int threads = static_cast<int>(per_thread->size());
+  const size_t n = points_W.size();
 #pragma omp parallel num_threads(threads)
   {
-    const int t = omp_get_thread_num();
-    octomap::KeyRay ray;
-    KeySet& free_set = free_sets[t];
+    VoxelBricks& bricks = (*per_thread)[omp_get_thread_num()];
+    bricks.clear();
+    const auto mark_free = [&bricks](const octomap::OcTreeKey& key) {
+      bricks.testAndSet(key, kRayFree);
+    };
 #pragma omp for schedule(dynamic, 512)
-    for (size_t i = 0; i < ends.size(); ++i) {
-      const octomap::point3d& end = ends[i];
+    for (size_t i = 0; i < n; ++i) {
+      octomap::point3d end = points_W[i];
+      if (discretize) {
+        // One ray per end voxel, to its centre (OctoMap's computeDiscreteUpdate).
+        const octomap::OcTreeKey key = tree.coordToKey(end);
+        if (bricks.testAndSet(key, kRayEndCast)) continue;
+        end = tree.keyToCoord(key);
+      }
       const bool within_range = max_range < 0.0 || (end - origin_W).norm() <= max_range;
       const octomap::point3d ray_end =
           within_range ? end : origin_W + (end - origin_W).normalized() * float(max_range);
-      if (tree.computeRayKeys(origin_W, ray_end, ray)) {
-        for (const octomap::OcTreeKey& key : ray) free_set.insert(pack(key));
-      }
+      traceRay(tree, origin_W, ray_end, mark_free);
       octomap::OcTreeKey key;
-      if (within_range && tree.coordToKeyChecked(end, key)) occupied_lists[t].push_back(pack(key));
+      if (within_range && tree.coordToKeyChecked(end, key)) bricks.testAndSet(key, kRayOccupied);
     }
   }
-
-  KeySet occupied(ends.size());
-  for (const auto& list : occupied_lists)
-    for (uint64_t v : list) occupied.insert(v);
-  KeySet& free_all = free_sets[0];
-  for (int t = 1; t < threads; ++t) free_sets[t].forEach([&](uint64_t v) { free_all.insert(v); });
-
-  ScanKeys keys;
-  keys.free.reserve(free_all.size());
-  free_all.forEach([&](uint64_t v) {
-    if (!occupied.contains(v)) keys.free.push_back(unpack(v));  // occupied wins
-  });
-  keys.occupied.reserve(occupied.size());
-  occupied.forEach([&](uint64_t v) { keys.occupied.push_back(unpack(v)); });
-  return keys;
+  VoxelBricks& all = (*per_thread)[0];
+  for (int t = 1; t < threads; ++t) all.merge((*per_thread)[t]);
+  all.sortBricks();
 }
 
 }  // namespace evidential_octomap

@@ -1,0 +1,44 @@
+// Morton (z-order) codes of OcTree keys with OctoMap's child order: bit i of x, y, z lands at
+// bit 3i, 3i+1, 3i+2, so a run of keys sorted by code is sorted by child index at every depth
+// and every subtree is one contiguous run. Private to the core.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+// OcTreeKey.h needs size_t, uint16_t and std::vector declared before it.
+#include <octomap/OcTreeKey.h>
+
+namespace evidential_octomap {
+
+// The 16 bits of v spread to every third bit.
+inline uint64_t spreadBits3(uint64_t v) {
+  v &= 0xFFFF;
+  v = (v | (v << 16)) & 0x0000FF0000FFull;
+  v = (v | (v << 8)) & 0x00F00F00F00Full;
+  v = (v | (v << 4)) & 0x0C30C30C30C3ull;
+  v = (v | (v << 2)) & 0x249249249249ull;
+  return v;
+}
+
+inline uint64_t mortonCode(const octomap::OcTreeKey& k) {
+  return spreadBits3(k[2]) << 2 | spreadBits3(k[1]) << 1 | spreadBits3(k[0]);
+}
+
+// Inverse of spreadBits3: every third bit of v, packed.
+inline uint64_t compactBits3(uint64_t v) {
+  v &= 0x249249249249ull;
+  v = (v | (v >> 2)) & 0x0C30C30C30C3ull;
+  v = (v | (v >> 4)) & 0x00F00F00F00Full;
+  v = (v | (v >> 8)) & 0x0000FF0000FFull;
+  v = (v | (v >> 16)) & 0xFFFF;
+  return v;
+}
+
+inline octomap::OcTreeKey keyFromMorton(uint64_t code) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(compactBits3(code)),
+                            static_cast<octomap::key_type>(compactBits3(code >> 1)),
+                            static_cast<octomap::key_type>(compactBits3(code >> 2)));
+}
+
+}  // namespace evidential_octomap
