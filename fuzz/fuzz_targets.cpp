@@ -24,6 +24,7 @@
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
+#include "evidential_octomap/map_editing.h"
 #include "../src/core/crc32.h"
 
 // Where sanitizers write their reports (weak: absent in builds without sanitizers).
@@ -335,6 +336,149 @@ int fuzzOtReader(const uint8_t* data, size_t size) {
   if (header.size > 0) {
     require(generic_ok == load_ok, generic_ok ? "loadMap rejects what AbstractOcTree::read accepts"
                                               : "loadMap accepts what AbstractOcTree::read rejects");
+  }
+  return 0;
+}
+
+namespace {
+
+// Values from the input: mostly raw bits, sometimes one of the values that break arithmetic.
+struct ByteReader {
+  const uint8_t* data;
+  size_t size, at = 0;
+  bool done() const { return at >= size; }
+  uint8_t byte() { return at < size ? data[at++] : 0; }
+  double number() {
+    static const double kSpecial[] = {std::nan(""), INFINITY, -INFINITY, 1e30, -1e30, 3.4e38,
+                                      0.0, -0.0, 1e-300, 1.0, 0.5, 0.999, 0.001, 1e300};
+    const uint8_t kind = byte();
+    if (kind < 48) return kSpecial[kind % (sizeof(kSpecial) / sizeof(kSpecial[0]))];
+    float value = 0.f;  // four raw bytes as a float
+    for (int i = 0; i < 4; ++i) reinterpret_cast<uint8_t*>(&value)[i] = byte();
+    return kind < 160 ? double(value) : double(kind - 160) / 8.0 - 4.0;  // or a small number
+  }
+  octomap::point3d point() {
+    const double x = number(), y = number(), z = number();
+    return octomap::point3d(float(x), float(y), float(z));
+  }
+};
+
+// The map every input starts from: one scan of a wall and a floor, C = 3.
+const EvidentialOcTree& servicesBaseMap() {
+  static const std::unique_ptr<EvidentialOcTree> base = [] {
+    SemanticConfig config;
+    config.threads = 1;
+    auto tree = std::make_unique<EvidentialOcTree>(0.2, 3, config);
+    octomap::Pointcloud points;
+    std::vector<float> evidence;
+    for (float y = -1.f; y <= 1.f; y += 0.25f) {
+      for (float z = -0.5f; z <= 0.5f; z += 0.25f) {
+        points.push_back(3.f, y, z);
+        evidence.insert(evidence.end(), {9.f, 1.f, 0.f});
+      }
+      points.push_back(1.5f, y, -1.f);
+      evidence.insert(evidence.end(), {0.f, 2.f, 12.f});
+    }
+    tree->insertSemanticScan(points, evidence, octomap::point3d(0.f, 0.f, 0.f));
+    return tree;
+  }();
+  return *base;
+}
+
+void checkWholeMap(const EvidentialOcTree& tree, const char* stage) {
+  for (auto it = tree.begin_tree(), end = tree.end_tree(); it != end; ++it) {
+    checkOpinion(tree, &*it, stage);
+  }
+}
+
+}  // namespace
+
+int fuzzMapServices(const uint8_t* data, size_t size) {
+  EvidentialOcTree tree(servicesBaseMap());
+  ByteReader in{data, size};
+  for (int op = 0; op < 16 && !in.done(); ++op) {
+    const std::string before = writeOt(tree);
+    switch (in.byte() % 5) {
+      case 0: {  // ~query
+        const octomap::point3d p = in.point();
+        const EvidentialOcTreeNode* node = tree.nodeAt(p);
+        const bool finite = std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+        require(finite || node == nullptr, "nodeAt found a node for a non-finite point");
+        checkOpinion(tree, node, "query");
+        const VoxelOpinion o = tree.query(p);
+        require(o.label == tree.opinion(node).label, "query(point) disagrees with nodeAt");
+        break;
+      }
+      case 1: {  // ~clear_bbx
+        const octomap::point3d min = in.point(), max = in.point();
+        const std::string problem = boxProblem(min, max);
+        try {
+          clearBox(&tree, min, max);
+          require(problem.empty(), "clearBox accepted a box boxProblem refuses: " + problem);
+        } catch (const std::invalid_argument&) {
+          require(!problem.empty(), "clearBox refused a box boxProblem accepts");
+          require(writeOt(tree) == before, "a refused clearBox changed the map");
+        }
+        break;
+      }
+      case 2: {  // ~sensor_model/* and its dynamic_reconfigure ranges
+        SensorModel model{in.number(), in.number(), in.number(), in.number(), in.number()};
+        try {
+          tree.setSensorModel(model);
+          require(model.problem().empty(), "setSensorModel accepted " + model.problem());
+        } catch (const std::invalid_argument&) {
+          require(!model.problem().empty(), "setSensorModel refused a valid model");
+          require(writeOt(tree) == before, "a refused sensor model changed the map");
+        }
+        break;
+      }
+      case 3: {  // kernel ~params / dynamic_reconfigure, then a scan
+        SemanticConfig config = tree.config();
+        config.length_scale = in.number();
+        config.beta = in.number();
+        config.gamma = in.number();
+        config.sigma0 = in.number();
+        config.drop_percent = in.number();
+        config.ds_multiplier = in.number();
+        config.max_range = in.number();
+        config.threads = 1;
+        try {
+          tree.setConfig(config);
+        } catch (const std::invalid_argument&) {
+          require(!config.problem().empty(), "setConfig refused a valid config");
+          require(writeOt(tree) == before, "a refused config changed the map");
+          break;
+        }
+        const std::string configured = writeOt(tree);
+        octomap::Pointcloud points;
+        points.push_back(in.point());
+        points.push_back(2.f, 0.5f, 0.f);
+        const std::vector<float> evidence{float(std::fabs(in.number())), 1.f, 0.f, 0.f, 0.f, 3.f};
+        const bool evidence_ok = std::isfinite(evidence[0]);
+        const std::string affordable = config.supportProblem(tree.getResolution());
+        try {
+          tree.insertSemanticScan(points, evidence, octomap::point3d(0.f, 0.f, 0.2f));
+          require(affordable.empty() && evidence_ok, "a scan that should be refused was run");
+        } catch (const std::invalid_argument&) {
+          require(!affordable.empty() || !evidence_ok, "an affordable, valid scan was refused");
+          require(writeOt(tree) == configured, "a refused scan changed the map");
+        }
+        break;
+      }
+      default: {  // ~save_map then ~load_map
+        const std::string bytes = writeOt(tree);
+        const MemFile file(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size());
+        std::unique_ptr<EvidentialOcTree> loaded;
+        try {
+          loaded = loadMap(file.path());
+        } catch (const std::exception& e) {
+          fuzzFail(std::string("a map the services made does not load: ") + e.what());
+        }
+        require(writeOt(*loaded) == bytes, "save -> load -> save is not byte-identical");
+        break;
+      }
+    }
+    checkWholeMap(tree, "after a service call");
   }
   return 0;
 }

@@ -24,6 +24,13 @@ int fuzzOtReader(const uint8_t* data, size_t size);
 // std::runtime_error; nothing else.
 int fuzzClassTable(const uint8_t* data, size_t size);
 
+// The core calls behind the node's services and settings, on a small map, in the order and with
+// the values the bytes give (every float may be NaN, inf or huge): query / nodeAt (~query),
+// clearBox (~clear_bbx), setSensorModel and setConfig + a scan (~params, dynamic_reconfigure),
+// saveMap + loadMap (~save_map, ~load_map). A refused request must change nothing; an accepted
+// one must leave a map whose every readout is an opinion and which saves and loads again.
+int fuzzMapServices(const uint8_t* data, size_t size);
+
 // Silences octomap's and our own diagnostics on std::cerr (thousands of expected
 // "corrupt file" lines per second); sanitizer reports are written to fd 2 directly.
 void silenceDiagnostics();

@@ -225,6 +225,18 @@ int main(int argc, char** argv) {
   std::ofstream(out + "/class_table/minimal.yaml")
       << "dataset: tiny\nignore_class: 0\nclasses:\n  - {name: a, color: [1, 2, 3]}\n"
          "  - {name: b, color: [4, 5, 6]}\nlearning_map:\n  0: 0\n  7: 1\n";
+  // Service calls (fuzzMapServices): byte strings of one kind of call each, and a mix.
+  makeDir(out + "/services");
+  for (int kind = 0; kind < 6; ++kind) {
+    std::vector<uint8_t> bytes;
+    uint32_t state = 1234567u + kind;
+    for (int i = 0; i < 96; ++i) {
+      state = state * 1664525u + 1013904223u;
+      bytes.push_back(i % 24 == 0 ? uint8_t(kind < 5 ? kind : state >> 24) : uint8_t(state >> 24));
+    }
+    std::ofstream(out + "/services/calls_" + std::to_string(kind) + ".bin", std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), long(bytes.size()));
+  }
   std::cout << "seeds written to " << out << "\n";
   return 0;
 }

@@ -1,6 +1,6 @@
 // Deterministic short fuzz run, no clang needed (ctest runs it; see test/reliability).
 //
-//   fuzz_replay --target ot|class_table [--corpus DIR]... [--regressions DIR]
+//   fuzz_replay --target ot|class_table|services [--corpus DIR]... [--regressions DIR]
 //               [--mutations N] [--seed S] [--save-current FILE] [--verbose]
 //
 // Runs the target on every corpus file and every regression input as they are, then on N inputs
@@ -203,12 +203,14 @@ int main(int argc, char** argv) {
     if (std::atol(cap) >= 0) mutations = std::min(mutations, std::atol(cap));
   }
   const bool ot = target == "ot";
-  if (!ot && target != "class_table") {
-    std::cerr << "--target must be ot or class_table\n";
+  int (*run)(const uint8_t*, size_t) = nullptr;
+  if (ot) run = evidential_octomap::fuzz::fuzzOtReader;
+  if (target == "class_table") run = evidential_octomap::fuzz::fuzzClassTable;
+  if (target == "services") run = evidential_octomap::fuzz::fuzzMapServices;
+  if (!run) {
+    std::cerr << "--target must be ot, class_table or services\n";
     return 2;
   }
-  auto run = ot ? evidential_octomap::fuzz::fuzzOtReader
-                : evidential_octomap::fuzz::fuzzClassTable;
   if (!verbose) {
     evidential_octomap::fuzz::silenceDiagnostics();
     evidential_octomap::fuzz::silenceStderr();

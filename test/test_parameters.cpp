@@ -98,6 +98,8 @@ TEST(ParameterSpace, EverySensorModelTheTreeAcceptsIsSavedAndLoaded) {
             }
             ++accepted;
             EXPECT_TRUE(model.problem().empty()) << what.str();
+            // What the tree reports back (through its float log-odds) is accepted again.
+            EXPECT_NO_THROW(tree.setSensorModel(tree.sensorModel())) << what.str();
             EXPECT_TRUE(savedAndLoadsBack(tree, path, what.str())) << what.str() << " refused";
           }
   std::remove(path.c_str());

@@ -127,7 +127,11 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
 
   // --- queries --------------------------------------------------------------------------
   VoxelOpinion opinion(const EvidentialOcTreeNode* node) const;  // node may be null
-  VoxelOpinion query(const octomap::point3d& point_W) const;
+  // The node holding point_W (a leaf, or a pruned block), or nullptr where the map knows nothing.
+  // Use it instead of OctoMap's search(point), which casts coordinate / resolution to int first:
+  // undefined behaviour for NaN, inf and points beyond the map's extent, answered nullptr here.
+  const EvidentialOcTreeNode* nodeAt(const octomap::point3d& point_W) const;
+  VoxelOpinion query(const octomap::point3d& point_W) const;  // opinion(nodeAt(point_W))
   VoxelOpinion query(const octomap::OcTreeKey& key, unsigned depth = 0) const;
   // The node's C floats (rule-specific, see fusion_rule.h), or nullptr if it has none. For an
   // inner node, the payload of its richest leaf.

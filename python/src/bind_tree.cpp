@@ -13,6 +13,7 @@
 #include "bindings.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
+#include "evidential_octomap/safe_key.h"
 
 namespace evidential_octomap::python {
 
@@ -76,16 +77,10 @@ QueryResult query(const EvidentialOcTree& tree, const PointsIn& points) {
   {
     nb::gil_scoped_release release;
     const auto p = points.view();
-    const double extent = tree.getResolution() * 32768.0;  // beyond it there are no keys
 #pragma omp parallel for schedule(static)
     for (size_t i = 0; i < n; ++i) {
       const octomap::point3d point(p(i, 0), p(i, 1), p(i, 2));
-      const EvidentialOcTreeNode* node = nullptr;
-      octomap::OcTreeKey key;
-      if (std::fabs(point.x()) < extent && std::fabs(point.y()) < extent &&
-          std::fabs(point.z()) < extent && tree.coordToKeyChecked(point, key)) {
-        node = tree.search(key);
-      }
+      const EvidentialOcTreeNode* node = tree.nodeAt(point);  // NaN / far away: unknown
       const VoxelOpinion o = tree.opinion(node);
       labels[i] = o.label;
       uncertainty[i] = o.uncertainty;
@@ -193,9 +188,7 @@ void bindColorTree(nb::module_& m) {
       .def(
           "save",
           [](const octomap::ColorOcTree& tree, const std::string& path) {
-            if (!const_cast<octomap::ColorOcTree&>(tree).write(path)) {
-              throw std::runtime_error("cannot write " + path);
-            }
+            writeFileAtomically(path, [&](std::ostream& out) { return tree.write(out) && out.good(); });
           },
           nb::arg("path"), "Writes an .ot file.")
       .def_prop_ro("num_leaves", &octomap::ColorOcTree::getNumLeafNodes)
@@ -207,7 +200,11 @@ void bindColorTree(nb::module_& m) {
             std::vector<uint8_t> rgb(n * 3, 0);
             const auto p = points.view();
             for (size_t i = 0; i < n; ++i) {
-              const auto* node = tree.search(p(i, 0), p(i, 1), p(i, 2));
+              octomap::OcTreeKey key;
+              if (!safeCoordToKey(tree, octomap::point3d(p(i, 0), p(i, 1), p(i, 2)), &key)) {
+                continue;  // NaN, inf or beyond the map: unknown
+              }
+              const auto* node = tree.search(key);
               if (!node) continue;
               const auto c = node->getColor();
               rgb[i * 3] = c.r;

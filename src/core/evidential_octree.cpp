@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "evidential_octomap/safe_key.h"
 #include "evidential_octomap/scan_integrator.h"
 #include "payload_pool.h"
 #include "tree_edit.h"
@@ -161,16 +162,13 @@ VoxelOpinion EvidentialOcTree::opinion(const EvidentialOcTreeNode* node) const {
   return rule_->readout(prior.data(), num_classes_);
 }
 
-VoxelOpinion EvidentialOcTree::query(const octomap::point3d& point_W) const {
-  // OctoMap's coordToKeyChecked casts coordinate / resolution to int: undefined for NaN, inf
-  // and anything beyond the tree's extent, so those are answered here.
-  const double extent = resolution * tree_max_val;
-  for (unsigned i = 0; i < 3; ++i) {
-    if (!(std::fabs(point_W(i)) < extent)) return opinion(nullptr);
-  }
+const EvidentialOcTreeNode* EvidentialOcTree::nodeAt(const octomap::point3d& point_W) const {
   octomap::OcTreeKey key;
-  if (!coordToKeyChecked(point_W, key)) return opinion(nullptr);
-  return query(key);
+  return safeCoordToKey(*this, point_W, &key) ? search(key) : nullptr;
+}
+
+VoxelOpinion EvidentialOcTree::query(const octomap::point3d& point_W) const {
+  return opinion(nodeAt(point_W));
 }
 
 VoxelOpinion EvidentialOcTree::query(const octomap::OcTreeKey& key, unsigned depth) const {

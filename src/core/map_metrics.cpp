@@ -63,7 +63,7 @@ MapMetrics evaluateMap(const EvidentialOcTree& tree, const std::vector<Query>& q
   QualityAccumulator acc(num_classes, ignore_class);
   for (const Query& q : queries) {
     if (q.gt < 0 || q.gt >= num_classes || q.gt == ignore_class) continue;
-    const EvidentialOcTreeNode* node = tree.search(q.point_W);
+    const EvidentialOcTreeNode* node = tree.nodeAt(q.point_W);
     if (node != nullptr && tree.isNodeOccupied(node)) ++m.occupied;
     const bool labelled = node != nullptr && node->hasSemantics();
     acc.add(q.gt, labelled ? answerOf(tree.opinion(node), tree.rule()) : Answer());

@@ -11,6 +11,7 @@
 #include <unordered_map>
 
 #include "evidential_octomap/kernel.h"
+#include "evidential_octomap/safe_key.h"
 #include "evidential_octomap/subjective_logic.h"
 #include "morton.h"
 #include "ray_casting.h"
@@ -321,14 +322,8 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   // exhaust memory (SemanticConfig::kMaxSupportLeaves).
   const std::string support_problem = config_.supportProblem(tree->getResolution());
   if (!support_problem.empty()) throw std::invalid_argument(support_problem);
-  // OctoMap's coordToKeyChecked casts coordinate / resolution to int, which is undefined for
-  // NaN, inf and anything beyond the map (points at 1e30): test the extent first.
-  const double extent = tree->getResolution() * 32768.0;  // 16-bit keys, tree_max_val
-  const auto inside = [extent](const octomap::point3d& p) {
-    return std::fabs(p.x()) < extent && std::fabs(p.y()) < extent && std::fabs(p.z()) < extent;
-  };
   octomap::OcTreeKey origin_key;
-  if (!inside(origin_W) || !tree->coordToKeyChecked(origin_W, origin_key)) {
+  if (!safeCoordToKey(*tree, origin_W, &origin_key)) {
     throw std::invalid_argument("sensor origin is not finite or outside the map's range");
   }
 
@@ -344,7 +339,7 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   octomap::OcTreeKey key;
   for (size_t i = 0; i < n; ++i) {
     const octomap::point3d& p = points_W.getPoint(i);
-    if (!inside(p) || !tree->coordToKeyChecked(p, key)) {
+    if (!safeCoordToKey(*tree, p, &key)) {  // NaN, inf or beyond the map
       ++stats.points_skipped;
       continue;
     }

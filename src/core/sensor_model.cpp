@@ -46,9 +46,8 @@ std::string SensorModel::problemOfLogOdds(float hit_log, float miss_log, float c
 }
 
 std::string SensorModel::problem() const {
-  // Probabilities are checked as they are (logodds(1) = inf would print as "probability 1").
-  if (!(hit >= kMinHit && hit <= kMaxHit)) return outside("hit", hit, kMinHit, kMaxHit);
-  if (!(miss >= kMinMiss && miss <= kMaxMiss)) return outside("miss", miss, kMinMiss, kMaxMiss);
+  // Checked as the tree stores them, (float) log-odds: a model read back from a tree (whose
+  // probabilities went through that float) passes exactly when the one that was set did.
   return problemOfLogOdds(logOdds(hit), logOdds(miss), logOdds(clamp_min), logOdds(clamp_max),
                           logOdds(occupancy_threshold));
 }

@@ -12,8 +12,8 @@
 
 #include "camera_projection.h"
 #include "conversions.h"
+#include "map_services.h"
 #include "evidential_octomap/io.h"
-#include "map_editing.h"
 #include "node_status.h"
 
 namespace evidential_octomap {
@@ -61,7 +61,7 @@ void warnDropped(const std::string& message) {
 MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private)
     : nh_(nh), pnh_(nh_private), tf_listener_(tf_buffer_) {
   config_ = readNodeConfig(pnh_);
-  readSemanticConfig(pnh_, &semantic_config_);
+  readSemanticConfig(pnh_, config_.resolution, &semantic_config_);
   classes_ = ClassTable::load(config_.classes);
   if (config_.num_classes != 0 && config_.num_classes != classes_.numClasses())
     throw std::invalid_argument("~num_classes = " + std::to_string(config_.num_classes) +
@@ -85,8 +85,14 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 1);
   status_.queue_capacity = static_cast<uint32_t>(config_.insert_queue_size);
 
-  save_srv_ = pnh_.advertiseService("save_map", &MappingServer::saveMap, this);
-  load_srv_ = pnh_.advertiseService("load_map", &MappingServer::loadMap, this);
+  // Files on their own queue and thread: a long load or save never holds up queries, clear_bbx,
+  // reset or the timers (and loading parses without the map lock).
+  ros::NodeHandle files_nh(pnh_);
+  files_nh.setCallbackQueue(&files_queue_);
+  save_srv_ = files_nh.advertiseService("save_map", &MappingServer::saveMap, this);
+  load_srv_ = files_nh.advertiseService("load_map", &MappingServer::loadMap, this);
+  files_spinner_ = std::make_unique<ros::AsyncSpinner>(1, &files_queue_);
+  files_spinner_->start();
   reset_srv_ = pnh_.advertiseService("reset", &MappingServer::reset, this);
   clear_srv_ = pnh_.advertiseService("clear_bbx", &MappingServer::clearBbx, this);
   query_srv_ = pnh_.advertiseService("query", &MappingServer::query, this);
@@ -94,6 +100,10 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   // Run-time parameters: push the values in use, then listen.
   reconfigure_server_ =
       std::make_unique<dynamic_reconfigure::Server<MappingConfig>>(reconfigure_mutex_, pnh_);
+  MappingConfig lo, hi;
+  reconfigureLimits(&lo, &hi);
+  reconfigure_server_->setConfigMin(lo);
+  reconfigure_server_->setConfigMax(hi);
   MappingConfig rc;
   toReconfigure(semantic_config_, *tree_, config_, &rc);
   reconfigure_server_->updateConfig(rc);
@@ -110,6 +120,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
 
 MappingServer::~MappingServer() {
   if (intake_spinner_) intake_spinner_->stop();
+  if (files_spinner_) files_spinner_->stop();
   clouds_->close();
   if (insertion_thread_.joinable()) insertion_thread_.join();
 }
@@ -147,10 +158,7 @@ std::unique_ptr<EvidentialOcTree> MappingServer::makeTree() {
       std::make_unique<EvidentialOcTree>(config_.resolution, config_.num_classes, semantic_config_);
   tree->setClassNames(classes_.names);
   if (tree_) {  // keep the sensor model in use (it may have been changed at run time)
-    tree->setProbHit(tree_->getProbHit());
-    tree->setProbMiss(tree_->getProbMiss());
-    tree->setClampingThresMin(tree_->getClampingThresMin());
-    tree->setClampingThresMax(tree_->getClampingThresMax());
+    tree->setSensorModel(tree_->sensorModel());
   } else {
     readOccupancyParams(pnh_, tree.get());
   }
@@ -424,20 +432,28 @@ bool MappingServer::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
 }
 
 bool MappingServer::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  // Parsed without the map lock: mapping and queries go on while a large file loads. loadMap
+  // reads regular files only (a FIFO would block, /dev/zero never end) up to the size limit.
+  std::unique_ptr<EvidentialOcTree> loaded;
   try {
-    std::unique_ptr<EvidentialOcTree> loaded = evidential_octomap::loadMap(req.path);
-    if (loaded->numClasses() != tree_->numClasses())
-      throw std::runtime_error(req.path + " has C = " + std::to_string(loaded->numClasses()) +
-                               ", this node maps C = " + std::to_string(tree_->numClasses()));
-    tree_ = std::move(loaded);
-    semantic_config_ = tree_->config();
+    const uint64_t limit = config_.load_map_max_mb > 0.0 ? uint64_t(config_.load_map_max_mb * 1e6) : 0;
+    loaded = evidential_octomap::loadMap(req.path, limit);
   } catch (const std::exception& e) {
     res.success = false;
     res.message = e.what();
     ROS_ERROR("load_map: %s (map unchanged)", e.what());
     return true;
   }
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (loaded->numClasses() != tree_->numClasses()) {
+    res.success = false;
+    res.message = req.path + " has C = " + std::to_string(loaded->numClasses()) +
+                  ", this node maps C = " + std::to_string(tree_->numClasses());
+    ROS_ERROR("load_map: %s (map unchanged)", res.message.c_str());
+    return true;
+  }
+  tree_ = std::move(loaded);
+  semantic_config_ = tree_->config();
   res.success = true;
   res.message = "loaded " + std::to_string(tree_->getNumLeafNodes()) + " leaves from " + req.path;
   ROS_INFO("load_map: %s", res.message.c_str());
@@ -470,10 +486,13 @@ bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 
 bool MappingServer::clearBbx(ClearBbx::Request& req, ClearBbx::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const octomap::point3d min(req.min.x, req.min.y, req.min.z), max(req.max.x, req.max.y, req.max.z);
-  res.voxels_cleared = clearBox(tree_.get(), min, max);
+  clearBoxRequest(tree_.get(), req, &res);
+  if (!res.success) {
+    ROS_ERROR("clear_bbx: %s; map unchanged", res.message.c_str());
+    return true;
+  }
   ROS_INFO("clear_bbx: %u leaves cleared in [%.2f %.2f %.2f] .. [%.2f %.2f %.2f]",
-           res.voxels_cleared, min.x(), min.y(), min.z(), max.x(), max.y(), max.z());
+           res.voxels_cleared, req.min.x, req.min.y, req.min.z, req.max.x, req.max.y, req.max.z);
   recordMapSize();
   outputs_->markStale();
   publishMap(true);
@@ -482,31 +501,27 @@ bool MappingServer::clearBbx(ClearBbx::Request& req, ClearBbx::Response& res) {
 
 bool MappingServer::query(QueryMap::Request& req, QueryMap::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  const int C = tree_->numClasses();
-  res.num_classes = static_cast<uint16_t>(C);
-  for (const auto& p : req.points) {
-    const octomap::point3d point(p.x, p.y, p.z);
-    const EvidentialOcTreeNode* node = tree_->search(point);
-    const VoxelOpinion o = tree_->opinion(node);
-    res.labels.push_back(o.label);
-    res.uncertainties.push_back(o.uncertainty);
-    res.occupancy.push_back(node ? static_cast<float>(node->getOccupancy()) : -1.f);
-    for (int c = 0; c < C; ++c) res.beliefs.push_back(c < int(o.belief.size()) ? o.belief[c] : 0.f);
-  }
+  answerQuery(*tree_, req, &res);
   return true;
 }
 
+// A setting the core refuses (or a kernel the machine cannot afford) is not applied: the values
+// in use stay and go back to the server, so clients see what the node maps with.
 void MappingServer::reconfigure(MappingConfig& rc, uint32_t) {
   std::lock_guard<std::mutex> lock(mutex_);
   SemanticConfig semantic = semantic_config_;
   NodeConfig node = config_;
-  fromReconfigure(rc, &semantic, &node, tree_.get());
-  try {
-    tree_->setConfig(semantic);
-    semantic_config_ = semantic;
-  } catch (const std::exception& e) {
-    ROS_ERROR("reconfigure: %s", e.what());
+  SensorModel model = tree_->sensorModel();
+  fromReconfigure(rc, &semantic, &node, &model);
+  const std::string problem = reconfigureProblem(semantic, model, tree_->getResolution());
+  if (!problem.empty()) {
+    ROS_ERROR("reconfigure refused: %s; the values in use stay", problem.c_str());
+    toReconfigure(semantic_config_, *tree_, config_, &rc);
+    return;
   }
+  tree_->setConfig(semantic);
+  tree_->setSensorModel(model);
+  semantic_config_ = semantic;
   config_.label_evidence = node.label_evidence;
   if (node.publish_rate != config_.publish_rate) {
     config_.publish_rate = node.publish_rate;

@@ -122,6 +122,10 @@ class MappingServer {
   std::unique_ptr<LatestQueue<PendingCloud>> clouds_;
   std::thread insertion_thread_;
 
+  // Map files (save_map, load_map): their own callback queue and thread.
+  ros::CallbackQueue files_queue_;
+  std::unique_ptr<ros::AsyncSpinner> files_spinner_;
+
   std::unique_ptr<MapOutputs> outputs_;
   ros::Publisher status_pub_, diagnostics_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_, clear_srv_, query_srv_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -266,13 +267,25 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
           s << "point " << index << ": label " << value << " is not a non-negative integer";
           return s.str();
         }
-        int label = static_cast<int>(value);
+        // Range-checked before any cast (a cast of 2^31, 4294967295 or 1e300 to int is undefined):
+        // class ids lie in [0, C), raw ids in the 32-bit range the learning map is keyed by.
+        const double limit = options.raw_label_table ? 4294967296.0 : double(C);
+        if (value >= limit) {
+          std::ostringstream s;
+          s << std::setprecision(17) << "point " << index << ": label " << value
+            << (options.raw_label_table ? " is beyond the 32-bit raw ids"
+                                        : " is outside [0, " + std::to_string(C) + ")");
+          return s.str();
+        }
+        int label = 0;
         if (options.raw_label_table) {
           try {
             label = options.raw_label_table->classOfRaw(static_cast<uint32_t>(value));
           } catch (const std::exception& e) {
             return "point " + std::to_string(index) + ": " + e.what();
           }
+        } else {
+          label = static_cast<int>(value);
         }
         if (label >= C) {
           std::ostringstream s;

@@ -28,6 +28,7 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("queue_size", c.queue_size, c.queue_size);
   nh.param("insert_queue_size", c.insert_queue_size, c.insert_queue_size);
   nh.param("latch", c.latch, c.latch);
+  nh.param("load_map/max_file_mb", c.load_map_max_mb, c.load_map_max_mb);
   nh.param("use_camera", c.use_camera, c.use_camera);
   nh.param("camera/input", c.camera_input, c.camera_input);
   nh.param("camera/keep_outside_image", c.keep_outside_image, c.keep_outside_image);
@@ -42,7 +43,7 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   return c;
 }
 
-void readSemanticConfig(const ros::NodeHandle& nh, SemanticConfig* config) {
+void readSemanticConfig(const ros::NodeHandle& nh, double resolution, SemanticConfig* config) {
   SemanticConfig& c = *config;
   nh.param("rule", c.rule, c.rule);
   nh.param("length_scale", c.length_scale, c.length_scale);
@@ -61,21 +62,20 @@ void readSemanticConfig(const ros::NodeHandle& nh, SemanticConfig* config) {
   nh.param("kernel_creates_leaves", c.kernel_creates_leaves, c.kernel_creates_leaves);
   nh.param("discretize", c.discretize, c.discretize);
   nh.param("threads", c.threads, c.threads);
+  std::string problem = c.problem();
+  if (problem.empty()) problem = c.supportProblem(resolution);
+  if (!problem.empty()) throw std::invalid_argument("~parameters refused: " + problem);
 }
 
 void readOccupancyParams(const ros::NodeHandle& nh, EvidentialOcTree* tree) {
-  double hit = tree->getProbHit(), miss = tree->getProbMiss();
-  double min = tree->getClampingThresMin(), max = tree->getClampingThresMax();
-  nh.param("sensor_model/hit", hit, hit);
-  nh.param("sensor_model/miss", miss, miss);
-  nh.param("sensor_model/min", min, min);
-  nh.param("sensor_model/max", max, max);
-  if (!(hit > 0.5 && hit <= 1.0) || !(miss >= 0.0 && miss < 0.5) || !(min < max))
-    throw std::invalid_argument("sensor_model: need 0.5 < hit <= 1, 0 <= miss < 0.5, min < max");
-  tree->setProbHit(hit);
-  tree->setProbMiss(miss);
-  tree->setClampingThresMin(min);
-  tree->setClampingThresMax(max);
+  SensorModel model = tree->sensorModel();
+  nh.param("sensor_model/hit", model.hit, model.hit);
+  nh.param("sensor_model/miss", model.miss, model.miss);
+  nh.param("sensor_model/min", model.clamp_min, model.clamp_min);
+  nh.param("sensor_model/max", model.clamp_max, model.clamp_max);
+  const std::string problem = model.problem();
+  if (!problem.empty()) throw std::invalid_argument("~" + problem);
+  tree->setSensorModel(model);
 }
 
 void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
@@ -100,7 +100,7 @@ void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
 }
 
 void fromReconfigure(const MappingConfig& rc, SemanticConfig* semantic, NodeConfig* node,
-                     EvidentialOcTree* tree) {
+                     SensorModel* model) {
   semantic->length_scale = rc.length_scale;
   semantic->sigma0 = rc.sigma0;
   semantic->beta = rc.beta;
@@ -112,14 +112,31 @@ void fromReconfigure(const MappingConfig& rc, SemanticConfig* semantic, NodeConf
   semantic->ds_multiplier = rc.ds_multiplier;
   semantic->kernel_creates_leaves = rc.kernel_creates_leaves;
   semantic->max_range = rc.sensor_model_max_range;
-  if (rc.sensor_model_hit > 0.5) tree->setProbHit(rc.sensor_model_hit);
-  if (rc.sensor_model_miss < 0.5) tree->setProbMiss(rc.sensor_model_miss);
-  if (rc.sensor_model_min < rc.sensor_model_max) {
-    tree->setClampingThresMin(rc.sensor_model_min);
-    tree->setClampingThresMax(rc.sensor_model_max);
-  }
+  model->hit = rc.sensor_model_hit;
+  model->miss = rc.sensor_model_miss;
+  model->clamp_min = rc.sensor_model_min;
+  model->clamp_max = rc.sensor_model_max;
   node->publish_rate = rc.publish_rate;
   node->label_evidence = rc.label_evidence;
+}
+
+std::string reconfigureProblem(const SemanticConfig& semantic, const SensorModel& model,
+                               double resolution) {
+  std::string problem = semantic.problem();
+  if (problem.empty()) problem = semantic.supportProblem(resolution);
+  if (problem.empty()) problem = model.problem();
+  return problem;
+}
+
+void reconfigureLimits(MappingConfig* min, MappingConfig* max) {
+  *min = MappingConfig::__getMin__();
+  *max = MappingConfig::__getMax__();
+  min->sensor_model_hit = SensorModel::kMinHit;
+  max->sensor_model_hit = SensorModel::kMaxHit;
+  min->sensor_model_miss = SensorModel::kMinMiss;
+  max->sensor_model_miss = SensorModel::kMaxMiss;
+  min->sensor_model_min = min->sensor_model_max = SensorModel::kMinProbability;
+  max->sensor_model_min = max->sensor_model_max = SensorModel::kMaxProbability;
 }
 
 }  // namespace evidential_octomap

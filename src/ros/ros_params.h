@@ -32,6 +32,7 @@ struct NodeConfig {
   int insert_queue_size = 1;         // clouds waiting for the insertion thread; when full, the
                                      // oldest is dropped (counted, warned, on ~status)
   bool latch = true;                 // latch the map topics (as octomap_server's `latch`)
+  double load_map_max_mb = 4096.0;   // ~load_map refuses larger files (<= 0: no limit)
   // Camera path (off unless use_camera): evidence image + CameraInfo paint the LiDAR cloud.
   bool use_camera = false;
   std::string camera_input = "evidence";  // evidence (32FC(C)) | label (mono8/mono16)
@@ -43,19 +44,29 @@ struct NodeConfig {
 NodeConfig readNodeConfig(const ros::NodeHandle& nh);
 
 // Reads the semantic parameters over `config` (names as in SemanticConfig; max range is
-// sensor_model/max_range as in octomap_server).
-void readSemanticConfig(const ros::NodeHandle& nh, SemanticConfig* config);
+// sensor_model/max_range as in octomap_server). Throws std::invalid_argument, naming the
+// parameter, for values the core's validation refuses (SemanticConfig::problem) and for a
+// kernel no scan at `resolution` may use (supportProblem): the node refuses to start.
+void readSemanticConfig(const ros::NodeHandle& nh, double resolution, SemanticConfig* config);
 
-// Reads sensor_model/{hit,miss,min,max} over the tree's current values and sets them.
+// Reads sensor_model/{hit,miss,min,max} over the tree's current values and sets them; throws
+// std::invalid_argument outside SensorModel's ranges (hit 1 gave a map that could not load).
 void readOccupancyParams(const ros::NodeHandle& nh, EvidentialOcTree* tree);
 
-// dynamic_reconfigure (src/ros/cfg/Mapping.cfg): the values in use -> the server's config, and
-// a config from the server -> semantic config, node config and the tree's sensor model (invalid
-// sensor models are ignored).
+// dynamic_reconfigure (src/ros/cfg/Mapping.cfg): the values in use -> the server's config, and a
+// config from the server -> semantic config, node config and sensor model, unchecked (the server
+// checks them with reconfigureProblem before anything is applied).
 void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
                    const NodeConfig& node, MappingConfig* rc);
 void fromReconfigure(const MappingConfig& rc, SemanticConfig* semantic, NodeConfig* node,
-                     EvidentialOcTree* tree);
+                     SensorModel* model);
+// "" when a reconfigured setting may be applied to a map of leaf size `resolution`, else why not
+// (the core's validation of both, and the kernel-support bound).
+std::string reconfigureProblem(const SemanticConfig& semantic, const SensorModel& model,
+                               double resolution);
+// The slider bounds the server advertises: Mapping.cfg's, with the sensor model's taken from
+// the core (SensorModel's ranges), so that no value inside them makes a map that cannot load.
+void reconfigureLimits(MappingConfig* min, MappingConfig* max);
 
 // The package's default class table (config/classes_semantickitti.yaml).
 std::string defaultClassTablePath();

@@ -214,7 +214,7 @@ cv::Mat errorLayer(const EvidentialOcTree& tree, const std::vector<Query>& queri
   for (const Query& q : queries) {
     int c, r;
     if (!g.toPixel(q.point_W.x(), q.point_W.y(), &c, &r)) continue;
-    const EvidentialOcTreeNode* node = tree.search(q.point_W);
+    const EvidentialOcTreeNode* node = tree.nodeAt(q.point_W);
     int kind = 2;  // no label: the voxel holds no evidence
     if (node && node->hasSemantics()) kind = tree.opinion(node).label == q.gt ? 0 : 1;
     ++counts[size_t(r) * g.width + c][kind];

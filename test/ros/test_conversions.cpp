@@ -215,6 +215,32 @@ TEST(FromPointCloud2, LabelOutOfRangeIsRejected) {
             std::string::npos);
 }
 
+// Issue 16 item 5: labels of 2^31 and more were cast to int (undefined) and mapped as
+// occupancy-only points without a word; label 20 (>= C) was refused. All are refused now.
+TEST(FromPointCloud2, HugeLabelsAreRefusedLikeLabelsBeyondC) {
+  SemanticCloud out;
+  {
+    CloudSpec spec{{{"x", PointField::FLOAT32, 1}, {"y", PointField::FLOAT32, 1},
+                    {"z", PointField::FLOAT32, 1}, {"label", PointField::UINT32, 1}}};
+    auto msg = makeCloud(spec, 3);
+    for (uint32_t label : {4294967295u, 2147483648u, 2147483647u}) {
+      put<uint32_t>(&msg, 2, "label", 0, label);
+      const std::string err = fromPointCloud2(msg, options(), &out);
+      EXPECT_NE(err.find("point 2: label " + std::to_string(label) + " is outside [0, 4)"),
+                std::string::npos)
+          << label << ": " << err;
+    }
+  }
+  CloudSpec spec{{{"x", PointField::FLOAT32, 1}, {"y", PointField::FLOAT32, 1},
+                  {"z", PointField::FLOAT32, 1}, {"label", PointField::FLOAT64, 1}}};
+  auto msg = makeCloud(spec, 3);
+  for (double label : {1e300, 4294967296.0, 2147483648.0}) {
+    put<double>(&msg, 1, "label", 0, label);
+    const std::string err = fromPointCloud2(msg, options(), &out);
+    EXPECT_NE(err.find("is outside [0, 4)"), std::string::npos) << label << ": " << err;
+  }
+}
+
 TEST(FromPointCloud2, MissingFieldIsNamed) {
   CloudSpec spec{{{"x", PointField::FLOAT32, 1}, {"y", PointField::FLOAT32, 1},
                   {"z", PointField::FLOAT32, 1}, {"intensity", PointField::FLOAT32, 1}}};

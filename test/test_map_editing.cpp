@@ -1,11 +1,14 @@
 // clearBox: every known voxel inside becomes free without evidence; every voxel outside keeps
-// its occupancy and semantics, also where a pruned (coarse) free-space leaf straddles the box.
+// its occupancy and semantics, also where a pruned (coarse) free-space leaf straddles the box;
+// a box with a non-finite corner or min > max is refused and changes nothing.
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include "map_editing.h"
+#include "evidential_octomap/map_editing.h"
 
 using namespace evidential_octomap;
 
@@ -99,7 +102,37 @@ TEST(ClearBox, EmptyTreeAndEmptyBoxClearNothing) {
   EXPECT_EQ(clearBox(tree.get(), octomap::point3d(50, 50, 50), octomap::point3d(51, 51, 51)), 0u);
 }
 
-int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  return RUN_ALL_TESTS();
+
+// Issue 16 item 3: max = NaN cleared a wall, max = (NaN, 1000, 1000) the whole map (NaN compares
+// false with every bound). Such boxes, and inverted ones, are refused with the map unchanged.
+TEST(ClearBox, NonFiniteAndInvertedBoxesAreRefusedAndChangeNothing) {
+  auto tree = wallMap();
+  std::ostringstream before;
+  tree->write(before);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  const octomap::point3d lo(4.f, -1.f, -1.f), hi(7.f, 1.f, 1.f);
+  const std::pair<octomap::point3d, octomap::point3d> bad[] = {
+      {lo, octomap::point3d(nan, nan, nan)},
+      {lo, octomap::point3d(nan, 1000.f, 1000.f)},
+      {octomap::point3d(-1000.f, nan, -1000.f), hi},
+      {lo, octomap::point3d(inf, 1.f, 1.f)},
+      {octomap::point3d(-inf, -1.f, -1.f), hi},
+      {hi, lo},                                                     // inverted on every axis
+      {octomap::point3d(4.f, 2.f, -1.f), octomap::point3d(7.f, 1.f, 1.f)},  // inverted in y
+  };
+  for (const auto& [min, max] : bad) {
+    EXPECT_FALSE(boxProblem(min, max).empty()) << min << " .. " << max;
+    EXPECT_THROW(clearBox(tree.get(), min, max), std::invalid_argument) << min << " .. " << max;
+  }
+  std::ostringstream after;
+  tree->write(after);
+  EXPECT_TRUE(before.str() == after.str()) << "a refused box changed the map";
+  // A box beyond the map's extent is fine: it is cut to the map.
+  EXPECT_EQ(boxProblem(octomap::point3d(-1e30f, -1e30f, -1e30f), octomap::point3d(1e30f, 1e30f, 1e30f)),
+            "");
+  EXPECT_GT(clearBox(tree.get(), octomap::point3d(-1e30f, -1e30f, -1e30f),
+                     octomap::point3d(1e30f, 1e30f, 1e30f)),
+            0u);
+  EXPECT_EQ(tree->numSemanticNodes(), 0u);
 }

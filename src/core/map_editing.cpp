@@ -1,14 +1,37 @@
-#include "map_editing.h"
+#include "evidential_octomap/map_editing.h"
 
 #include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
 namespace evidential_octomap {
 
+std::string boxProblem(const octomap::point3d& min, const octomap::point3d& max) {
+  static const char kAxes[] = "xyz";
+  for (int i = 0; i < 3; ++i) {
+    std::ostringstream s;
+    if (!std::isfinite(min(i)) || !std::isfinite(max(i))) {
+      s << "box corner " << kAxes[i] << " is not finite (min " << min(i) << ", max " << max(i)
+        << ")";
+      return s.str();
+    }
+    if (min(i) > max(i)) {
+      s << "box is inverted: min " << kAxes[i] << " = " << min(i) << " > max " << kAxes[i]
+        << " = " << max(i);
+      return s.str();
+    }
+  }
+  return "";
+}
+
 // Leaves are not deleted: OctoMap 1.9's deleteNode frees an emptied parent without its child
 // array, which trips an assertion in Debian's liboctomap.
 uint32_t clearBox(EvidentialOcTree* tree, const octomap::point3d& min, const octomap::point3d& max) {
+  const std::string problem = boxProblem(min, max);
+  if (!problem.empty()) throw std::invalid_argument("clear box refused: " + problem);
   if (tree->getRoot() == nullptr) return 0;
   const double lim = tree->getResolution() * 32767.0;
   auto clampPoint = [&](octomap::point3d p) {

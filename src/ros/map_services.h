@@ -1,0 +1,21 @@
+// The work of the node's map services, request to response, without node state or a roscore:
+// gtest-able, fuzzed (fuzz/fuzz_services.cpp), and the only place these requests touch the map.
+// MappingServer locks the map, calls these and logs.
+#pragma once
+
+#include "evidential_octomap/ClearBbx.h"
+#include "evidential_octomap/QueryMap.h"
+#include "evidential_octomap/evidential_octree.h"
+
+namespace evidential_octomap {
+
+// Per point: label, uncertainty, occupancy (-1: unknown) and beliefs, through the guarded
+// EvidentialOcTree::nodeAt (NaN, inf and far-away points are unknown, never undefined).
+void answerQuery(const EvidentialOcTree& tree, const QueryMap::Request& req,
+                 QueryMap::Response* res);
+
+// clearBox on the request's box. A refused box (non-finite or inverted) changes nothing:
+// success false and the reason in message.
+void clearBoxRequest(EvidentialOcTree* tree, const ClearBbx::Request& req, ClearBbx::Response* res);
+
+}  // namespace evidential_octomap
