@@ -279,6 +279,69 @@ TEST(EvidenceConversions, LabelIsOneHot) {
   EXPECT_EQ(e[3], 0.0f);
 }
 
+TEST(EvidenceConversions, OneHotProbabilityGivesTheLabelEvidence) {
+  const float p[3] = {0.0f, 1.0f, 0.0f};
+  float e[3], expected[3];
+  EXPECT_EQ(evidenceFromProbabilities(p, 3, 20.0f, e), "");
+  evidenceFromLabel(1, 3, 20.0f, expected);
+  for (int c = 0; c < 3; ++c) EXPECT_FLOAT_EQ(e[c], expected[c]);
+}
+
+TEST(EvidenceConversions, UniformProbabilityIsVacuous) {
+  const float p[4] = {0.25f, 0.25f, 0.25f, 0.25f};
+  float e[4];
+  EXPECT_EQ(evidenceFromProbabilities(p, 4, 20.0f, e), "");
+  for (float v : e) EXPECT_NEAR(v, 0.0f, 1e-6);
+}
+
+TEST(EvidenceConversions, ProbabilityEvidenceIsConfidenceScaled) {
+  // p = (0.6, 0.3, 0.1), C = 3: confidence (3 * 0.6 - 1) / 2 = 0.4, e = 20 * 0.4 * p.
+  const float p[3] = {0.6f, 0.3f, 0.1f};
+  float e[3];
+  EXPECT_EQ(evidenceFromProbabilities(p, 3, 20.0f, e), "");
+  EXPECT_NEAR(e[0], 4.8f, 1e-5);
+  EXPECT_NEAR(e[1], 2.4f, 1e-5);
+  EXPECT_NEAR(e[2], 0.8f, 1e-5);
+  const float unnormalised[3] = {6.0f, 3.0f, 1.0f};  // normalised by the sum first
+  EXPECT_EQ(evidenceFromProbabilities(unnormalised, 3, 20.0f, e), "");
+  EXPECT_NEAR(e[0], 4.8f, 1e-5);
+}
+
+TEST(EvidenceConversions, BadProbabilitiesAreNamed) {
+  float e[2];
+  const float negative[2] = {-0.1f, 1.1f};
+  EXPECT_NE(evidenceFromProbabilities(negative, 2, 20.0f, e).find("class 0"), std::string::npos);
+  const float zero[2] = {0.0f, 0.0f};
+  EXPECT_NE(evidenceFromProbabilities(zero, 2, 20.0f, e), "");
+}
+
+TEST(EvidenceConversions, LogitTransforms) {
+  const float z[3] = {2.0f, 0.0f, -1.0f};
+  float e[3];
+  EXPECT_EQ(evidenceFromLogits(z, 3, LogitTransform::kExp, 20.0f, e), "");
+  EXPECT_NEAR(e[0], std::exp(2.0), 1e-5);
+  EXPECT_NEAR(e[2], std::exp(-1.0), 1e-6);
+  EXPECT_EQ(evidenceFromLogits(z, 3, LogitTransform::kSoftplus, 20.0f, e), "");
+  EXPECT_NEAR(e[0], std::log(1.0 + std::exp(2.0)), 1e-6);
+  EXPECT_NEAR(e[1], std::log(2.0), 1e-6);
+  // softmax: p = exp(z) / sum, then the probability conversion (computed here by hand).
+  const double s = std::exp(2.0) + 1.0 + std::exp(-1.0);
+  const double p0 = std::exp(2.0) / s, confidence = (3 * p0 - 1) / 2;
+  EXPECT_EQ(evidenceFromLogits(z, 3, LogitTransform::kSoftmax, 20.0f, e), "");
+  EXPECT_NEAR(e[0], 20.0 * p0 * confidence, 1e-5);
+  EXPECT_NEAR(e[2], 20.0 * std::exp(-1.0) / s * confidence, 1e-5);
+  const float huge[3] = {1000.0f, 0.0f, 0.0f};  // no overflow
+  EXPECT_EQ(evidenceFromLogits(huge, 3, LogitTransform::kSoftmax, 20.0f, e), "");
+  EXPECT_NEAR(e[0], 20.0f, 1e-4);
+  EXPECT_EQ(evidenceFromLogits(huge, 3, LogitTransform::kExp, 20.0f, e), "");
+  EXPECT_TRUE(std::isfinite(e[0]));
+  const float nan[3] = {0.0f, std::nanf(""), 0.0f};
+  EXPECT_NE(evidenceFromLogits(nan, 3, LogitTransform::kExp, 20.0f, e).find("class 1"),
+            std::string::npos);
+  EXPECT_EQ(logitTransformFromName("softplus"), LogitTransform::kSoftplus);
+  EXPECT_THROW(logitTransformFromName("sigmoid"), std::invalid_argument);
+}
+
 TEST(CheckEvidence, ValidEvidenceGivesEmptyMessage) {
   const float e[4] = {0.0f, 1.5f, 1e20f, -0.0f};  // -0 is not negative
   EXPECT_EQ(checkEvidence(e, 4), "");

@@ -32,8 +32,27 @@ Opinion dempsterCombine(const Opinion& m1, const Opinion& m2);
 // otherwise a message naming the offending class and value.
 std::string checkEvidence(const float* evidence, int num_classes);
 
-// Conversions for inputs that are not raw evidence.
+// Conversions for inputs that are not raw evidence (docs/learned_evidence.md, "your own network").
 void evidenceFromAlpha(const float* alpha, int num_classes, float* evidence_out);   // e = alpha - 1
 void evidenceFromLabel(int label, int num_classes, float magnitude, float* evidence_out);  // one-hot
+
+// Class probabilities p (e.g. a softmax) -> confidence-scaled evidence
+//   e_c = E * p_c * (C * p_max - 1) / (C - 1),
+// so a one-hot p gives E on its class (as evidenceFromLabel) and a uniform p gives no evidence
+// (u = 1); the argmax is kept and u grows as p flattens. p is normalised by its sum first.
+// Returns "" or what is wrong (a value negative or not finite, a sum <= 0).
+std::string evidenceFromProbabilities(const float* p, int num_classes, float magnitude,
+                                      float* evidence_out);
+
+// How per-class logits z become evidence:
+//   softmax   an ordinary (cross-entropy) network: p = softmax(z), then evidenceFromProbabilities;
+//   exp       an EDL network trained with exp evidence: e = exp(min(z, 80));
+//   softplus  an EDL network trained with softplus evidence: e = log(1 + exp(z)).
+enum class LogitTransform { kSoftmax, kExp, kSoftplus };
+LogitTransform logitTransformFromName(const std::string& name);  // throws std::invalid_argument
+std::string logitTransformName(LogitTransform transform);
+// Returns "" or what is wrong (a logit not finite).
+std::string evidenceFromLogits(const float* logits, int num_classes, LogitTransform transform,
+                               float magnitude, float* evidence_out);
 
 }  // namespace evidential_octomap

@@ -1,7 +1,10 @@
 #include "evidential_octomap/subjective_logic.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace evidential_octomap {
 
@@ -70,6 +73,73 @@ void evidenceFromAlpha(const float* alpha, int num_classes, float* evidence_out)
 
 void evidenceFromLabel(int label, int num_classes, float magnitude, float* evidence_out) {
   for (int c = 0; c < num_classes; ++c) evidence_out[c] = (c == label) ? magnitude : 0.0f;
+}
+
+std::string evidenceFromProbabilities(const float* p, int num_classes, float magnitude,
+                                      float* evidence_out) {
+  double sum = 0.0, max = 0.0;
+  for (int c = 0; c < num_classes; ++c) {
+    if (!std::isfinite(p[c]) || p[c] < 0.0f) {
+      std::ostringstream msg;
+      msg << "probability of class " << c << " is " << p[c] << " (must be finite and >= 0)";
+      return msg.str();
+    }
+    sum += p[c];
+    max = std::max(max, double(p[c]));
+  }
+  if (!(sum > 0.0)) return "probabilities sum to 0";
+  const int C = num_classes;
+  const double confidence = C > 1 ? std::max(0.0, (C * max / sum - 1.0) / (C - 1)) : 1.0;
+  for (int c = 0; c < C; ++c) {
+    evidence_out[c] = float(magnitude * (p[c] / sum) * confidence);
+  }
+  return {};
+}
+
+LogitTransform logitTransformFromName(const std::string& name) {
+  if (name == "softmax") return LogitTransform::kSoftmax;
+  if (name == "exp") return LogitTransform::kExp;
+  if (name == "softplus") return LogitTransform::kSoftplus;
+  throw std::invalid_argument("logit transform '" + name +
+                              "' is unknown; use softmax, exp or softplus");
+}
+
+std::string logitTransformName(LogitTransform transform) {
+  switch (transform) {
+    case LogitTransform::kSoftmax: return "softmax";
+    case LogitTransform::kExp: return "exp";
+    case LogitTransform::kSoftplus: return "softplus";
+  }
+  return "?";
+}
+
+std::string evidenceFromLogits(const float* z, int num_classes, LogitTransform transform,
+                               float magnitude, float* evidence_out) {
+  double zmax = -std::numeric_limits<double>::infinity();
+  for (int c = 0; c < num_classes; ++c) {
+    if (!std::isfinite(z[c])) {
+      std::ostringstream msg;
+      msg << "logit of class " << c << " is " << z[c] << " (must be finite)";
+      return msg.str();
+    }
+    zmax = std::max(zmax, double(z[c]));
+  }
+  switch (transform) {
+    case LogitTransform::kExp:
+      for (int c = 0; c < num_classes; ++c) evidence_out[c] = float(std::exp(std::min(z[c], 80.0f)));
+      return {};
+    case LogitTransform::kSoftplus:
+      for (int c = 0; c < num_classes; ++c) {
+        evidence_out[c] = z[c] > 20.0f ? z[c] : float(std::log1p(std::exp(double(z[c]))));
+      }
+      return {};
+    case LogitTransform::kSoftmax: {
+      std::vector<float> p(static_cast<size_t>(num_classes));
+      for (int c = 0; c < num_classes; ++c) p[size_t(c)] = float(std::exp(double(z[c]) - zmax));
+      return evidenceFromProbabilities(p.data(), num_classes, magnitude, evidence_out);
+    }
+  }
+  return {};
 }
 
 }  // namespace evidential_octomap

@@ -243,6 +243,8 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
   options.input =
       config_.use_camera ? EvidenceInput::kNone : evidenceInputFromName(config_.input_type);
   options.label_magnitude = static_cast<float>(config_.label_evidence);
+  options.logit_transform = logitTransformFromName(config_.logit_transform);
+  options.probability_magnitude = static_cast<float>(config_.probability_evidence);
   options.raw_label_table = config_.label_is_raw ? &classes_ : nullptr;
   SemanticCloud scan;
   std::string error = fromPointCloud2(cloud, options, &scan);

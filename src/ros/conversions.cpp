@@ -131,10 +131,13 @@ EvidenceInput evidenceInputFromName(const std::string& name) {
   if (name == "auto") return EvidenceInput::kAuto;
   if (name == "evidence") return EvidenceInput::kEvidence;
   if (name == "alpha") return EvidenceInput::kAlpha;
+  if (name == "logits") return EvidenceInput::kLogits;
+  if (name == "probabilities") return EvidenceInput::kProbabilities;
   if (name == "label") return EvidenceInput::kLabel;
   if (name == "none") return EvidenceInput::kNone;
   throw std::invalid_argument("input_type '" + name +
-                              "' is unknown; use auto, evidence, alpha, label or none");
+                              "' is unknown; use auto, evidence, alpha, logits, probabilities, "
+                              "label or none");
 }
 
 std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudReadOptions& options,
@@ -195,11 +198,13 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
     case EvidenceInput::kAuto:
       err = tryChannels("evidence", EvidenceInput::kEvidence);
       if (err == "absent") err = tryChannels("alpha", EvidenceInput::kAlpha);
+      if (err == "absent") err = tryChannels("logits", EvidenceInput::kLogits);
+      if (err == "absent") err = tryChannels("probabilities", EvidenceInput::kProbabilities);
       if (err == "absent") err = tryLabel();
       if (err == "absent")
         err = "no semantic field: expected 'evidence' (float32, count " + std::to_string(C) +
-              "), 'evidence_0'..'evidence_" + std::to_string(C - 1) + "', 'alpha' or 'label' (fields: " +
-              fieldList(msg) + ")";
+              "), 'evidence_0'..'evidence_" + std::to_string(C - 1) +
+              "', 'alpha', 'logits', 'probabilities' or 'label' (fields: " + fieldList(msg) + ")";
       break;
     case EvidenceInput::kEvidence:
       err = tryChannels("evidence", EvidenceInput::kEvidence);
@@ -213,6 +218,15 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
         err = "missing field 'alpha' (float32, count " + std::to_string(C) + ") or 'alpha_0'.. (fields: " +
               fieldList(msg) + ")";
       break;
+    case EvidenceInput::kLogits:
+    case EvidenceInput::kProbabilities: {
+      const std::string base = options.input == EvidenceInput::kLogits ? "logits" : "probabilities";
+      err = tryChannels(base, options.input);
+      if (err == "absent")
+        err = "missing field '" + base + "' (float32, count " + std::to_string(C) + ") or '" +
+              base + "_0'.. (fields: " + fieldList(msg) + ")";
+      break;
+    }
     case EvidenceInput::kLabel:
       err = tryLabel();
       if (err == "absent") err = "missing field 'label' (fields: " + fieldList(msg) + ")";
@@ -224,6 +238,13 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
   switch (input) {
     case EvidenceInput::kEvidence: out->source = "evidence[" + std::to_string(C) + "]"; break;
     case EvidenceInput::kAlpha: out->source = "alpha[" + std::to_string(C) + "]"; break;
+    case EvidenceInput::kLogits:
+      out->source = "logits[" + std::to_string(C) + "] (" +
+                    logitTransformName(options.logit_transform) + ")";
+      break;
+    case EvidenceInput::kProbabilities:
+      out->source = "probabilities[" + std::to_string(C) + "]";
+      break;
     case EvidenceInput::kLabel: out->source = "label"; break;
     default: out->source = "none (occupancy only)"; break;
   }
@@ -232,7 +253,7 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
   const bool swap = msg.is_bigendian != 0;  // this code assumes a little-endian host
   out->points_S.reserve(n_points);
   out->evidence.reserve(n_points * C);
-  std::vector<float> row(C);
+  std::vector<float> row(C), scratch(C);
   for (uint32_t v = 0; v < msg.height; ++v) {
     const uint8_t* row_ptr = msg.data.data() + size_t(v) * msg.row_step;
     for (uint32_t u = 0; u < msg.width; ++u) {
@@ -260,6 +281,17 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
           }
           row[c] = static_cast<float>(value);
         }
+      } else if (input == EvidenceInput::kLogits || input == EvidenceInput::kProbabilities) {
+        std::vector<float>& raw = scratch;
+        for (int c = 0; c < C; ++c)
+          raw[c] = float(readValue(p + channels[c].offset, channels[c].datatype, swap));
+        const std::string bad =
+            input == EvidenceInput::kLogits
+                ? evidenceFromLogits(raw.data(), C, options.logit_transform,
+                                     options.probability_magnitude, row.data())
+                : evidenceFromProbabilities(raw.data(), C, options.probability_magnitude,
+                                            row.data());
+        if (!bad.empty()) return "point " + std::to_string(index) + ": " + bad;
       } else if (input == EvidenceInput::kLabel) {
         const double value = readValue(p + label_ref.offset, label_ref.datatype, swap);
         if (!std::isfinite(value) || value != std::floor(value) || value < 0) {

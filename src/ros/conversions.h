@@ -13,24 +13,32 @@
 #include "evidential_octomap/OccupancyMap.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/subjective_logic.h"
 
 namespace evidential_octomap {
 
 // Which per-point field carries the semantics.
 enum class EvidenceInput {
-  kAuto,      // the first present of: evidence, evidence_0.., alpha, label
+  kAuto,      // the first present of: evidence, alpha, logits, probabilities, label
   kEvidence,  // `evidence` (float32, count = C) or `evidence_0` .. `evidence_{C-1}`
   kAlpha,     // `alpha` (float32, count = C) or `alpha_0` ..; e = alpha - 1
+  kLogits,    // `logits` (float32, count = C) or `logits_0` ..; e by CloudReadOptions::logits
+  kProbabilities,  // `probabilities` (count = C) or `probabilities_0` ..: confidence-scaled
   kLabel,     // `label` (any integer or float type): one-hot evidence of `label_magnitude`
   kNone,      // no semantics: occupancy only (zero evidence)
 };
-// "auto", "evidence", "alpha", "label", "none"; throws std::invalid_argument otherwise.
+// "auto", "evidence", "alpha", "logits", "probabilities", "label", "none"; throws
+// std::invalid_argument otherwise.
 EvidenceInput evidenceInputFromName(const std::string& name);
 
 struct CloudReadOptions {
   int num_classes = 0;
   EvidenceInput input = EvidenceInput::kAuto;
   float label_magnitude = 20.0f;   // evidence of the labelled class for `label` inputs
+  // `logits`: how they become evidence (subjective_logic.h); `probabilities` and softmax
+  // logits: E of the confidence-scaled conversion.
+  LogitTransform logit_transform = LogitTransform::kSoftmax;
+  float probability_magnitude = 20.0f;
   // Labels are raw dataset ids, mapped through this table's learning map (nullptr: class ids).
   const ClassTable* raw_label_table = nullptr;
 };

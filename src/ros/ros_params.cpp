@@ -19,6 +19,8 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("num_classes", c.num_classes, c.num_classes);
   nh.param("input_type", c.input_type, c.input_type);
   nh.param("label_evidence", c.label_evidence, c.label_evidence);
+  nh.param("logit_transform", c.logit_transform, c.logit_transform);
+  nh.param("probability_evidence", c.probability_evidence, c.probability_evidence);
   nh.param("label_is_raw", c.label_is_raw, c.label_is_raw);
   nh.param("publish_rate", c.publish_rate, c.publish_rate);
   nh.param("publish_radius", c.publish_radius, c.publish_radius);
@@ -37,6 +39,9 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   if (c.label_evidence < 0.0) throw std::invalid_argument("~label_evidence must be >= 0");
   if (c.queue_size < 1) throw std::invalid_argument("~queue_size must be >= 1");
   if (c.insert_queue_size < 1) throw std::invalid_argument("~insert_queue_size must be >= 1");
+  if (!(c.probability_evidence >= 0.0))
+    throw std::invalid_argument("~probability_evidence must be >= 0");
+  logitTransformFromName(c.logit_transform);  // throws with the valid names
   if (c.camera_input != "evidence" && c.camera_input != "label")
     throw std::invalid_argument("~camera/input must be 'evidence' or 'label'");
   evidenceInputFromName(c.input_type);  // throws with the valid names

@@ -51,9 +51,22 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_name) {
   cmd->add_option("--evidence", *source_name,
                   "Evidence source: file (evidence/ or alpha/ of the dataset), onehot, knn-vote, "
-                  "confusion (the last three are derived from hard labels)")
-      ->check(CLI::IsMember({"file", "onehot", "knn-vote", "confusion"}))
+                  "confusion (these three are derived from hard labels), learned (a small "
+                  "evidential model, cross-fitted: each scan from the fold not trained on it)")
+      ->check(CLI::IsMember({"file", "onehot", "knn-vote", "confusion", "learned"}))
       ->capture_default_str();
+  cmd->add_option("--logit-transform", o->logit_transform_name,
+                  "How logits/ files become evidence: softmax (ordinary network; then as "
+                  "probabilities), exp or softplus (EDL network)")
+      ->check(CLI::IsMember({"softmax", "exp", "softplus"}))
+      ->capture_default_str();
+  cmd->add_option("--probability-evidence", o->conversion.probability_magnitude,
+                  "E of the confidence-scaled evidence of probabilities/ (and softmax logits): "
+                  "e_c = E p_c (C p_max - 1) / (C - 1)")
+      ->capture_default_str();
+  cmd->add_option("--learned-model", o->learned_model,
+                  "Model file of --evidence learned (default: <class table dir>/learned/"
+                  "<dataset>.model)");
   cmd->add_option("-E,--evidence-magnitude", o->magnitude,
                   "Evidence magnitude E of derived sources")
       ->capture_default_str();
@@ -62,18 +75,21 @@ void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_n
       ->capture_default_str();
 }
 
-void finishEvidenceOptions(const std::string& source_name, EvidenceOptions* o) {
+void finishEvidenceOptions(const std::string& source_name, const std::string& classes_path,
+                           const ClassTable& classes, EvidenceOptions* o) {
   o->source = evidenceSourceFromName(source_name);
+  o->conversion.logit_transform = logitTransformFromName(o->logit_transform_name);
+  if (o->learned_model.empty()) o->learned_model = defaultLearnedModel(classes_path, classes);
 }
 
 std::vector<std::string> captionLines(const std::string& what, const std::string& variant,
-                                      const std::string& evidence, bool derived,
+                                      const std::string& evidence, const std::string& kind,
                                       const std::string& protocol,
                                       const std::string& predictions_note) {
   std::vector<std::string> lines;
   lines.push_back(what + " | " + variant + " | protocol: " + protocol);
   lines.push_back("evidence: " + evidence +
-                  (derived ? "" : " (network evidence)"));
+                  (kind == "network evidence" ? " (network evidence)" : ""));
   if (!predictions_note.empty()) lines.push_back("predictions: " + predictions_note);
   return lines;
 }

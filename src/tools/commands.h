@@ -17,18 +17,20 @@ void addCompareCommand(CLI::App& app);  // compare.cpp
 void addExportCommand(CLI::App& app);   // export_color.cpp
 void addMergeCommand(CLI::App& app);    // merge.cpp
 void addInfoCommand(CLI::App& app);     // info.cpp
+void addFeaturesCommand(CLI::App& app); // features.cpp
 
 // --- shared option groups (defaults come from the structs, never restated) -----------------
 // Mapping parameters of SemanticConfig plus the tree resolution.
 void addConfigOptions(CLI::App* cmd, SemanticConfig* config, double* resolution);
-// --evidence, -E, --knn-k, --knn-radius; the source name is parsed into options->source by
-// finishEvidenceOptions().
+// --evidence, -E, --knn-k, --knn-radius, --learned-model; the source name is parsed into
+// options->source, and an empty model path set to its default, by finishEvidenceOptions().
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* options, std::string* source_name);
-void finishEvidenceOptions(const std::string& source_name, EvidenceOptions* options);
+void finishEvidenceOptions(const std::string& source_name, const std::string& classes_path,
+                           const ClassTable& classes, EvidenceOptions* options);
 
-// Caption lines shared by every PNG and the reports.
+// Caption lines shared by every PNG and the reports; `kind` is evidenceKind() of the source.
 std::vector<std::string> captionLines(const std::string& what, const std::string& variant,
-                                      const std::string& evidence, bool derived,
+                                      const std::string& evidence, const std::string& kind,
                                       const std::string& protocol,
                                       const std::string& predictions_note);
 

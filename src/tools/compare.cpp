@@ -177,6 +177,7 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
       r.evidence_source = source_name;
       r.evidence_description = describeEvidence(ev);
       r.evidence_derived = derivedFromHardLabels(ev.source);
+      r.evidence_kind = evidenceKind(ev.source);
       r.predictions_note = predictions_note;
       r.config = config;
       r.resolution = o.resolution;
@@ -219,13 +220,17 @@ void runCompare(const CompareOptions& o) {
   const Dataset dataset = Dataset::open(o.data, classes);
   const std::vector<Scan> scans = loadScans(dataset, o.scans, !o.quiet);
   std::vector<std::string> sources = o.sources;
+  CompareOptions with_model = o;  // --evidence learned: the model beside the class table
+  if (with_model.evidence.learned_model.empty()) {
+    with_model.evidence.learned_model = defaultLearnedModel(o.classes, classes);
+  }
   const std::string label = fs::path(o.data).filename().string() +
                             (fs::path(o.data).filename().empty()
                                  ? fs::path(o.data).parent_path().filename().string()
                                  : "");
   for (const std::string& p : o.protocols) {
     if (p == "held-out" && scans.size() < 2) continue;
-    runSection(o, label, o.data, classes, scans, p, sources, "", &sections, &runs);
+    runSection(with_model, label, o.data, classes, scans, p, sources, "", &sections, &runs);
   }
 
   std::string rellis_note;
@@ -249,14 +254,15 @@ void runCompare(const CompareOptions& o) {
       useSyntheticPredictions(&rscans, rtable, o.noise);
       std::vector<std::string> rsources;
       for (const auto& s : o.sources)
-        if (s != "confusion" && s != "file") rsources.push_back(s);
+        if (s != "confusion" && s != "file" && s != "learned") rsources.push_back(s);
       runSection(o, "RELLIS-3D " + fs::path(rdata).filename().string() +
                         " (single scan, identity pose, SYNTHETIC predictions)",
                  rdata, rtable, rscans, "reconstruction", rsources, o.noise.describe(), &sections,
                  &runs);
       sections.back().notes.push_back(
           "Evidence `confusion` is not run here: one scan leaves no other scan to estimate the "
-          "confusion matrix on.");
+          "confusion matrix on; `learned` neither (no model is trained for this class set, "
+          "and one scan cannot be cross-fitted).");
     } else {
       rellis_note = "RELLIS-3D part skipped: " + rdata + " or " + rclasses + " not found.";
     }
@@ -275,8 +281,10 @@ void runCompare(const CompareOptions& o) {
         "median insertSemanticScan wall time (loading and evidence derivation excluded). "
         "dropped % = points above the per-scan percentile threshold. Resolution "
      << o.resolution << " m; every other parameter at its SemanticConfig default unless the "
-     << "variant changes it (see compare.json). All evidence here is **derived from hard "
-        "labels**, not produced by an EDL network. Runs: "
+     << "variant changes it (see compare.json). Evidence `onehot`, `knn-vote` and `confusion` "
+        "is **derived from hard labels**; `learned` is a small evidential model's, "
+        "**cross-fitted** (no scan's evidence from a model that saw its labels); none is a "
+        "full EDL network's. Runs: "
      << (o.explicit_selection ? std::string("the --sources/--variants/--protocols given")
                               : "--plan " + o.plan + " (see compare --help)")
      << ".\n\n";
@@ -319,7 +327,7 @@ void addCompareCommand(CLI::App& app) {
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
       ->capture_default_str();
   cmd->add_option("--sources", o->sources,
-                  "Evidence sources (file, onehot, knn-vote, confusion)")
+                  "Evidence sources (file, onehot, knn-vote, confusion, learned)")
       ->delimiter(',')
       ->check(CLI::IsMember({"file", "onehot", "knn-vote", "confusion"}))
       ->capture_default_str();
@@ -356,6 +364,9 @@ void addCompareCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--knn-radius", o->evidence.knn_radius, "Neighbour radius of knn-vote [m]")
       ->capture_default_str();
+  cmd->add_option("--learned-model", o->evidence.learned_model,
+                  "Model file of the learned source (default: <class table dir>/learned/"
+                  "<dataset>.model)");
   cmd->add_option("--plan", o->plan,
                   "default: every variant with onehot, dempster with/without threshold for "
                   "knn-vote and confusion, held-out dempster/sbki/ebs with onehot (~10 min); "

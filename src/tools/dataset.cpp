@@ -207,9 +207,11 @@ std::vector<int> classesOfLabels(const std::vector<uint32_t>& raw, const ClassTa
 
 // --- Dataset ----------------------------------------------------------------------------------
 
-Dataset Dataset::open(const std::string& path, const ClassTable& classes) {
+Dataset Dataset::open(const std::string& path, const ClassTable& classes,
+                      const InputConversion& conversion) {
   Dataset d;
   d.path_ = path;
+  d.conversion_ = conversion;
   d.classes_ = &classes;
   const fs::path root(path);
   if (!fs::exists(root)) throw std::runtime_error(path + ": no such file or directory");
@@ -222,10 +224,10 @@ Dataset Dataset::open(const std::string& path, const ClassTable& classes) {
     const fs::path labels = root / "labels", predictions = root / "predictions";
     d.has_labels_ = fs::is_directory(labels);
     d.has_predictions_ = fs::is_directory(predictions);
-    for (const char* dir : {"evidence", "alpha"}) {
+    for (const char* dir : {"evidence", "alpha", "logits", "probabilities"}) {
       if (fs::is_directory(root / dir)) {
         d.evidence_dir_ = (root / dir).string();
-        d.evidence_is_alpha_ = std::string(dir) == "alpha";
+        d.evidence_kind_ = dir;
         break;
       }
     }
@@ -292,6 +294,48 @@ Dataset Dataset::open(const std::string& path, const ClassTable& classes) {
   return d;
 }
 
+std::string Dataset::describeEvidenceFiles() const {
+  if (evidence_kind_ == "logits") {
+    const std::string t = logitTransformName(conversion_.logit_transform);
+    return "logits/ files, " + t +
+           (conversion_.logit_transform == LogitTransform::kSoftmax
+                ? " then confidence-scaled evidence, E=" + std::to_string(int(conversion_.probability_magnitude))
+                : " evidence (EDL)");
+  }
+  if (evidence_kind_ == "probabilities") {
+    return "probabilities/ files, confidence-scaled evidence, E=" +
+           std::to_string(int(conversion_.probability_magnitude));
+  }
+  return evidence_kind_.empty() ? "" : evidence_kind_ + "/ files";
+}
+
+std::vector<float> Dataset::readEvidence(const std::string& file, size_t n, size_t C) const {
+  std::vector<float> raw = readFloatMatrix(file, n, C);
+  std::vector<float> ev(raw.size());
+  for (size_t k = 0; k < n; ++k) {
+    const float* in = raw.data() + k * C;
+    float* out = ev.data() + k * C;
+    std::string bad;
+    if (evidence_kind_ == "logits") {
+      bad = evidenceFromLogits(in, int(C), conversion_.logit_transform,
+                               conversion_.probability_magnitude, out);
+    } else if (evidence_kind_ == "probabilities") {
+      bad = evidenceFromProbabilities(in, int(C), conversion_.probability_magnitude, out);
+    } else {
+      const bool alpha = evidence_kind_ == "alpha";
+      for (size_t c = 0; c < C && bad.empty(); ++c) {
+        out[c] = alpha ? in[c] - 1.0f : in[c];
+        if (!std::isfinite(out[c]) || out[c] < 0.0f) {
+          bad = "invalid " + evidence_kind_ + " " + std::to_string(in[c]) + " of class " +
+                std::to_string(c) + (alpha ? " (alpha must be >= 1)" : " (must be >= 0)");
+        }
+      }
+    }
+    if (!bad.empty()) throw fileError(file, "point " + std::to_string(k) + ": " + bad);
+  }
+  return ev;
+}
+
 Scan Dataset::load(size_t i) const {
   if (i >= stems_.size()) throw std::out_of_range("Dataset::load: scan index out of range");
   Scan scan;
@@ -313,23 +357,10 @@ Scan Dataset::load(size_t i) const {
   if (has_predictions_) pred = readClasses(prediction_files_[i]);
   std::vector<float> ev;
   const int C = classes_->numClasses();
-  if (hasEvidence()) {
-    ev = readFloatMatrix(evidence_files_[i], n, size_t(C));
-    if (evidence_is_alpha_) {
-      for (float& a : ev) a -= 1.0f;
-    }
-    for (size_t k = 0; k < ev.size(); ++k) {
-      if (!std::isfinite(ev[k]) || ev[k] < 0.0f) {
-        throw fileError(evidence_files_[i],
-                        std::string("invalid ") + (evidence_is_alpha_ ? "alpha" : "evidence") +
-                            " at point " + std::to_string(k / C) + ", class " +
-                            std::to_string(k % C) +
-                            (evidence_is_alpha_ ? " (alpha must be >= 1)" : " (must be >= 0)"));
-      }
-    }
-  }
+  if (hasEvidence()) ev = readEvidence(evidence_files_[i], n, size_t(C));
 
   scan.points_S.reserve(n);
+  scan.remission.reserve(n);
   for (size_t k = 0; k < n; ++k) {
     const float x = xyzr[4 * k], y = xyzr[4 * k + 1], z = xyzr[4 * k + 2];
     if (x == 0.0f && y == 0.0f && z == 0.0f) {
@@ -337,6 +368,7 @@ Scan Dataset::load(size_t i) const {
       continue;
     }
     scan.points_S.emplace_back(x, y, z);
+    scan.remission.push_back(xyzr[4 * k + 3]);
     if (!gt.empty()) scan.gt.push_back(gt[k]);
     if (!pred.empty()) scan.predicted.push_back(pred[k]);
     if (!ev.empty()) scan.evidence.insert(scan.evidence.end(), ev.begin() + k * C,

@@ -62,6 +62,7 @@ void runEval(const EvalOptions& o) {
   r.evidence_source = "unknown";
   r.evidence_description = o.evidence_note;
   r.evidence_derived = false;
+  r.evidence_kind = "unknown";
   r.predictions_note = predictions_note;
   r.config = tree->config();
   r.resolution = tree->getResolution();

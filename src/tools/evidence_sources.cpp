@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
@@ -13,7 +14,8 @@ const std::vector<std::pair<EvidenceSource, std::string>> kSourceNames{
     {EvidenceSource::kFile, "file"},
     {EvidenceSource::kOneHot, "onehot"},
     {EvidenceSource::kKnnVote, "knn-vote"},
-    {EvidenceSource::kConfusion, "confusion"}};
+    {EvidenceSource::kConfusion, "confusion"},
+    {EvidenceSource::kLearned, "learned"}};
 
 void requirePredictions(const Scan& scan, const std::string& source) {
   if (scan.predicted.size() != scan.size()) {
@@ -28,7 +30,7 @@ EvidenceSource evidenceSourceFromName(const std::string& name) {
     if (n == name) return source;
   }
   throw std::invalid_argument("unknown evidence source '" + name +
-                              "' (valid: file, onehot, knn-vote, confusion)");
+                              "' (valid: file, onehot, knn-vote, confusion, learned)");
 }
 
 std::string evidenceSourceName(EvidenceSource source) {
@@ -38,14 +40,35 @@ std::string evidenceSourceName(EvidenceSource source) {
   return "?";
 }
 
-bool derivedFromHardLabels(EvidenceSource source) { return source != EvidenceSource::kFile; }
+bool derivedFromHardLabels(EvidenceSource source) {
+  return source != EvidenceSource::kFile && source != EvidenceSource::kLearned;
+}
+
+std::string evidenceKind(EvidenceSource source) {
+  if (source == EvidenceSource::kLearned) return "learned (cross-fitted)";
+  return derivedFromHardLabels(source) ? "derived" : "network evidence";
+}
+
+std::string defaultLearnedModel(const std::string& classes_path, const ClassTable& classes) {
+  const std::filesystem::path dir = std::filesystem::path(classes_path).parent_path();
+  return (dir / "learned" / (classes.dataset + ".model")).string();
+}
+
+ScanInput scanInput(const Scan& scan) {
+  ScanInput in;
+  in.xyz = scan.points_S.empty() ? nullptr : scan.points_S.front().data();
+  in.remission = scan.remission.size() == scan.size() ? scan.remission.data() : nullptr;
+  in.predicted = scan.predicted.size() == scan.size() ? scan.predicted.data() : nullptr;
+  in.num_points = scan.size();
+  return in;
+}
 
 std::string describeEvidence(const EvidenceOptions& o) {
   std::ostringstream s;
   s << evidenceSourceName(o.source);
   switch (o.source) {
     case EvidenceSource::kFile:
-      s << " (per-point evidence files of the dataset)";
+      s << " (per-point " << (o.files.empty() ? "evidence files" : o.files) << " of the dataset)";
       return s.str();
     case EvidenceSource::kOneHot:
       s << ", E=" << o.magnitude;
@@ -56,6 +79,11 @@ std::string describeEvidence(const EvidenceOptions& o) {
     case EvidenceSource::kConfusion:
       s << ", E=" << o.magnitude << ", leave-one-scan-out";
       break;
+    case EvidenceSource::kLearned:
+      s << " (cross-fitted: each scan's evidence from the model fold(s) not trained on it; "
+        << "evidential MLP on geometry and the hard predictions, model " << o.learned_model
+        << ")";
+      return s.str();
   }
   s << " (derived from hard labels)";
   return s.str();
@@ -216,7 +244,8 @@ std::vector<float> confusionEvidence(const std::vector<int>& predicted,
 
 std::vector<float> deriveEvidence(const Scan& scan, size_t scan_index,
                                   const EvidenceOptions& options, int num_classes,
-                                  const ConfusionModel* model) {
+                                  const ConfusionModel* model,
+                                  const LearnedEvidenceModel* learned) {
   switch (options.source) {
     case EvidenceSource::kFile:
       if (scan.evidence.size() != scan.size() * size_t(num_classes)) {
@@ -236,6 +265,19 @@ std::vector<float> deriveEvidence(const Scan& scan, size_t scan_index,
       if (model == nullptr) throw std::runtime_error("confusion evidence needs a ConfusionModel");
       return confusionEvidence(scan.predicted, model->conditional(scan_index), num_classes,
                                options.magnitude);
+    case EvidenceSource::kLearned:
+      requirePredictions(scan, "learned");
+      if (learned == nullptr) throw std::runtime_error("learned evidence needs a loaded model");
+      if (learned->numClasses() != num_classes) {
+        throw std::runtime_error(learned->path() + " has " +
+                                 std::to_string(learned->numClasses()) +
+                                 " classes, the class table " + std::to_string(num_classes));
+      }
+      try {
+        return learned->evidence(scanInput(scan));
+      } catch (const std::runtime_error& e) {
+        throw std::runtime_error("scan " + scan.name + ": " + e.what());
+      }
   }
   return {};
 }

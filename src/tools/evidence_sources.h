@@ -9,6 +9,10 @@
 //   confusion  e^c = E * P(p|p) * P(c|p), p the prediction, P(gt = c | pred = p) estimated on
 //              *other* scans only (leave-one-scan-out) and smoothed towards the global accuracy;
 //              u is constant per predicted class and larger for the less precise classes.
+//   learned    a small evidential MLP on per-point geometry and the hard predictions
+//              (include/evidential_octomap/learned_evidence.h), CROSS-FITTED: each scan's
+//              evidence comes from the model fold(s) not trained on it. Labelled "learned
+//              (cross-fitted)", never "derived".
 #pragma once
 
 #include <cstdint>
@@ -16,21 +20,31 @@
 #include <vector>
 
 #include "dataset.h"
+#include "evidential_octomap/learned_evidence.h"
 
 namespace evidential_octomap::tools {
 
-enum class EvidenceSource { kFile, kOneHot, kKnnVote, kConfusion };
+enum class EvidenceSource { kFile, kOneHot, kKnnVote, kConfusion, kLearned };
 
 struct EvidenceOptions {
   EvidenceSource source = EvidenceSource::kOneHot;
   float magnitude = 20.0f;   // E
   int knn_k = 8;
   double knn_radius = 0.5;   // [m]
+  std::string learned_model;  // model file of kLearned ("": defaultLearnedModel)
+  InputConversion conversion;  // kFile: how logits/ and probabilities/ files become evidence
+  std::string logit_transform_name = "softmax";  // CLI spelling of conversion.logit_transform
+  std::string files;           // kFile: Dataset::describeEvidenceFiles(), for the captions
 };
 
 EvidenceSource evidenceSourceFromName(const std::string& name);  // throws std::invalid_argument
 std::string evidenceSourceName(EvidenceSource source);
 bool derivedFromHardLabels(EvidenceSource source);
+// The kind of evidence for captions: "derived", "learned (cross-fitted)" or "network evidence".
+std::string evidenceKind(EvidenceSource source);
+// <directory of the class table>/learned/<table's dataset>.model, e.g.
+// config/learned/semantickitti.model beside config/classes_semantickitti.yaml.
+std::string defaultLearnedModel(const std::string& classes_path, const ClassTable& classes);
 // One line for captions and reports, e.g. "onehot, E=20 (derived from hard labels)".
 std::string describeEvidence(const EvidenceOptions& options);
 // Label of the input row of the metric tables, e.g. "input evidence (onehot), per point".
@@ -56,10 +70,15 @@ class ConfusionModel {
 };
 
 // N x C evidence of `scan` from `options`. For kConfusion, `model` must hold scans other than
-// `scan_index`. Throws std::runtime_error when the needed input (predictions, files) is missing.
+// `scan_index`; for kLearned, `learned` is the loaded model. Throws std::runtime_error when the
+// needed input (predictions, files, a fold that did not see the scan) is missing.
 std::vector<float> deriveEvidence(const Scan& scan, size_t scan_index,
                                   const EvidenceOptions& options, int num_classes,
-                                  const ConfusionModel* model);
+                                  const ConfusionModel* model,
+                                  const LearnedEvidenceModel* learned = nullptr);
+
+// The scan as the learned model's input (borrows the scan's arrays).
+ScanInput scanInput(const Scan& scan);
 
 std::vector<float> oneHotEvidence(const std::vector<int>& predicted, int num_classes,
                                   float magnitude);

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   t::addExportCommand(app);
   t::addMergeCommand(app);
   t::addInfoCommand(app);
+  t::addFeaturesCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

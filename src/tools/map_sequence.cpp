@@ -30,11 +30,13 @@ struct MapOptions {
 };
 
 void runMap(const MapOptions& o) {
-  EvidenceOptions ev = o.evidence;
-  finishEvidenceOptions(o.evidence_name, &ev);
   const ClassTable classes = ClassTable::load(o.classes);
-  const Dataset dataset = Dataset::open(o.data, classes);
-  if (derivedFromHardLabels(ev.source) && !dataset.hasPredictions() && !o.synthetic) {
+  EvidenceOptions ev = o.evidence;
+  finishEvidenceOptions(o.evidence_name, o.classes, classes, &ev);
+  const Dataset dataset = Dataset::open(o.data, classes, ev.conversion);
+  ev.files = dataset.describeEvidenceFiles();
+  const bool needs_predictions = ev.source != EvidenceSource::kFile;
+  if (needs_predictions && !dataset.hasPredictions() && !o.synthetic) {
     throw std::runtime_error(o.data + ": no predictions/ to derive '" + o.evidence_name +
                              "' evidence from; pass --synthetic-predictions (GT with the "
                              "documented noise model) or use --evidence file with evidence/ "
@@ -61,6 +63,7 @@ void runMap(const MapOptions& o) {
   r.evidence_source = evidenceSourceName(ev.source);
   r.evidence_description = describeEvidence(ev);
   r.evidence_derived = derivedFromHardLabels(ev.source);
+  r.evidence_kind = evidenceKind(ev.source);
   r.predictions_note = predictions_note;
   r.config = run.tree->config();
   r.resolution = o.resolution;
@@ -81,7 +84,7 @@ void runMap(const MapOptions& o) {
   if (o.render) {
     const TopDownGrid grid = makeGrid(*run.tree, &queries);
     auto caption = [&](const std::string& what) {
-      return captionLines(what, r.variant, r.evidence_description, r.evidence_derived, r.protocol,
+      return captionLines(what, r.variant, r.evidence_description, r.evidence_kind, r.protocol,
                           r.predictions_note);
     };
     writePng(o.out + "/semantic.png", renderSemantic(*run.tree, classes, grid, caption("semantic map")));

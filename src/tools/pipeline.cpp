@@ -108,10 +108,19 @@ std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans
       model.addScan(s, scan.gt, scan.predicted);
     }
   }
+  std::unique_ptr<LearnedEvidenceModel> learned;
+  if (options.source == EvidenceSource::kLearned) {
+    learned = std::make_unique<LearnedEvidenceModel>(
+        LearnedEvidenceModel::load(options.learned_model));
+  }
   std::vector<std::vector<float>> evidence(scans.size());
-  for (size_t s : which) evidence[s] = deriveEvidence(scans.at(s), s, options, C, &model);
+  for (size_t s : which) {
+    evidence[s] = deriveEvidence(scans.at(s), s, options, C, &model, learned.get());
+  }
   for (size_t s : also) {
-    if (evidence[s].empty()) evidence[s] = deriveEvidence(scans.at(s), s, options, C, &model);
+    if (evidence[s].empty()) {
+      evidence[s] = deriveEvidence(scans.at(s), s, options, C, &model, learned.get());
+    }
   }
   return evidence;
 }

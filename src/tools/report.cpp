@@ -133,6 +133,7 @@ nlohmann::json toJson(const RunReport& r, const ClassTable& classes) {
   j["evidence_source"] = r.evidence_source;
   j["evidence_description"] = r.evidence_description;
   j["evidence_derived_from_hard_labels"] = r.evidence_derived;
+  j["evidence_kind"] = r.evidence_kind;
   j["predictions"] = r.predictions_note.empty() ? "as shipped with the dataset" : r.predictions_note;
   j["resolution"] = r.resolution;
   j["parameters"] = configJson(r.config);
@@ -222,6 +223,9 @@ std::string toMarkdown(const RunReport& r, const ClassTable& classes) {
   for (const auto& n : r.query_scans) s << ' ' << n;
   s << "\n- evidence: **" << r.evidence_description << "**";
   if (r.evidence_derived) s << " — derived from hard labels, not network evidence";
+  if (r.evidence_kind == "learned (cross-fitted)") {
+    s << " — learned (cross-fitted): no scan's evidence comes from a model that saw its labels";
+  }
   s << "\n- predictions: " << (r.predictions_note.empty() ? "as shipped with the dataset"
                                                            : r.predictions_note)
     << "\n- resolution " << r.resolution << " m; queries: " << r.map.quality.queries

@@ -24,6 +24,7 @@ struct RunReport {
   std::string evidence_source;           // file | onehot | knn-vote | confusion | unknown
   std::string evidence_description;      // describeEvidence()
   bool evidence_derived = true;          // derived from hard labels
+  std::string evidence_kind = "derived";  // evidenceKind(): derived | learned (cross-fitted) | ..
   std::string predictions_note;          // e.g. synthetic noise model; empty for real ones
   SemanticConfig config;
   double resolution = 0.2;

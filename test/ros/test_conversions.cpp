@@ -163,6 +163,47 @@ TEST(FromPointCloud2, AlphaBelowOneIsRejected) {
   EXPECT_NE(err.find("alpha must be finite and >= 1"), std::string::npos) << err;
 }
 
+TEST(FromPointCloud2, LogitsBecomeEvidenceByTheChosenTransform) {
+  CloudSpec spec{{{"x", PointField::FLOAT32, 1}, {"y", PointField::FLOAT32, 1},
+                  {"z", PointField::FLOAT32, 1}, {"logits", PointField::FLOAT32, kC}}};
+  auto msg = makeCloud(spec, 1);
+  const float z[kC] = {1.f, 3.f, 0.f, -2.f};
+  for (int c = 0; c < kC; ++c) put<float>(&msg, 0, "logits", c, z[c]);
+  SemanticCloud out;
+  CloudReadOptions o = options();
+  o.logit_transform = LogitTransform::kExp;
+  ASSERT_EQ(fromPointCloud2(msg, o, &out), "");
+  EXPECT_EQ(out.source, "logits[4] (exp)");
+  for (int c = 0; c < kC; ++c) EXPECT_NEAR(out.evidence[c], std::exp(z[c]), 1e-4);
+  // softmax (the default): confidence-scaled evidence of p = softmax(z), computed by hand.
+  o.logit_transform = LogitTransform::kSoftmax;
+  o.probability_magnitude = 10.f;
+  ASSERT_EQ(fromPointCloud2(msg, o, &out), "");
+  double sum = 0;
+  for (float v : z) sum += std::exp(v);
+  const double confidence = (kC * std::exp(3.0) / sum - 1.0) / (kC - 1);
+  for (int c = 0; c < kC; ++c)
+    EXPECT_NEAR(out.evidence[c], 10.0 * std::exp(z[c]) / sum * confidence, 1e-5);
+}
+
+TEST(FromPointCloud2, ProbabilitiesBecomeConfidenceScaledEvidence) {
+  CloudSpec spec{{{"x", PointField::FLOAT32, 1}, {"y", PointField::FLOAT32, 1},
+                  {"z", PointField::FLOAT32, 1}, {"probabilities", PointField::FLOAT32, kC}}};
+  auto msg = makeCloud(spec, 2);
+  const float p[kC] = {0.1f, 0.7f, 0.1f, 0.1f};
+  for (int c = 0; c < kC; ++c) put<float>(&msg, 0, "probabilities", c, p[c]);
+  put<float>(&msg, 1, "probabilities", 0, -0.5f);  // invalid
+  SemanticCloud out;
+  const std::string err = fromPointCloud2(msg, options(), &out);
+  EXPECT_NE(err.find("point 1: probability of class 0"), std::string::npos) << err;
+  put<float>(&msg, 1, "probabilities", 0, 1.f);
+  ASSERT_EQ(fromPointCloud2(msg, options(), &out), "");
+  EXPECT_EQ(out.source, "probabilities[4]");
+  const double confidence = (kC * 0.7 - 1.0) / (kC - 1);  // 0.6
+  for (int c = 0; c < kC; ++c) EXPECT_NEAR(out.evidence[c], 20.0 * p[c] * confidence, 1e-5);
+  for (int c = 0; c < kC; ++c) EXPECT_NEAR(out.evidence[kC + c], c == 0 ? 20.f : 0.f, 1e-5);
+}
+
 TEST(FromPointCloud2, LabelOfAnyIntegerTypeIsOneHot) {
   for (uint8_t type : {PointField::UINT8, PointField::UINT16, PointField::INT32, PointField::UINT32,
                        PointField::FLOAT32}) {

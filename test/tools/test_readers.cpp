@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <Eigen/LU>
 #include <filesystem>
 #include <fstream>
@@ -11,7 +13,9 @@
 
 namespace fs = std::filesystem;
 using evidential_octomap::ClassTable;
+using evidential_octomap::LogitTransform;
 using evidential_octomap::tools::Dataset;
+using evidential_octomap::tools::InputConversion;
 using evidential_octomap::tools::readFloatMatrix;
 using namespace tools_test;
 
@@ -185,6 +189,36 @@ TEST_F(BrokenKitti, AlphaFilesBecomeEvidence) {
   ASSERT_EQ(scan.evidence.size(), 200u);
   EXPECT_FLOAT_EQ(scan.evidence[3 * 20 + 9], 5.0f);
   EXPECT_FLOAT_EQ(scan.evidence[0], 0.0f);
+}
+
+TEST_F(BrokenKitti, LogitsFilesBecomeEvidenceByTheChosenTransform) {
+  writeBinary(dir + "/labels/000000.label", std::vector<uint32_t>(10, 40));
+  fs::create_directories(dir + "/logits");
+  std::vector<float> z(10 * 20, 0.0f);
+  z[3 * 20 + 9] = 2.0f;
+  writeBinary(dir + "/logits/000000.bin", z);
+  InputConversion edl;
+  edl.logit_transform = LogitTransform::kExp;
+  const Dataset d = Dataset::open(dir, classes, edl);
+  EXPECT_EQ(d.evidenceKind(), "logits");
+  EXPECT_NE(d.describeEvidenceFiles().find("exp"), std::string::npos);
+  const auto scan = d.load(0);
+  EXPECT_NEAR(scan.evidence[3 * 20 + 9], std::exp(2.0f), 1e-5);
+  EXPECT_NEAR(scan.evidence[3 * 20 + 8], 1.0f, 1e-6);  // exp(0)
+  // softmax (default): uniform logits of point 0 give no evidence at all (u = 1).
+  const auto soft = Dataset::open(dir, classes).load(0);
+  for (int c = 0; c < 20; ++c) EXPECT_NEAR(soft.evidence[c], 0.0f, 1e-6);
+}
+
+TEST_F(BrokenKitti, BadProbabilityFileNamesFileAndPoint) {
+  writeBinary(dir + "/labels/000000.label", std::vector<uint32_t>(10, 40));
+  fs::create_directories(dir + "/probabilities");
+  std::vector<float> p(10 * 20, 0.05f);
+  p[4 * 20 + 2] = -1.0f;
+  writeBinary(dir + "/probabilities/000000.bin", p);
+  const std::string msg = messageOf([&] { Dataset::open(dir, classes).load(0); });
+  EXPECT_NE(msg.find("probabilities/000000.bin"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("point 4"), std::string::npos) << msg;
 }
 
 TEST(FloatMatrixReader, ReadsNpyVersion1) {
