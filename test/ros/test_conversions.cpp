@@ -404,7 +404,9 @@ TEST(FromPointCloud2, BigEndianCloudsAreSwapped) {
 
 TEST(EvidenceInputName, UnknownNameThrows) {
   EXPECT_EQ(evidenceInputFromName("alpha"), EvidenceInput::kAlpha);
-  EXPECT_THROW(evidenceInputFromName("logits"), std::invalid_argument);
+  EXPECT_EQ(evidenceInputFromName("logits"), EvidenceInput::kLogits);
+  EXPECT_EQ(evidenceInputFromName("probabilities"), EvidenceInput::kProbabilities);
+  EXPECT_THROW(evidenceInputFromName("softmax"), std::invalid_argument);
 }
 
 // --- tree -> views ------------------------------------------------------------------------

@@ -14,10 +14,15 @@ Published (REP 105 names):
   /tf      map -> velodyne, T_world_velo(i) = inv(Tr) * P(i) * Tr (semantic-kitti-api);
   ~evidence_source (std_msgs/String, latched) says how the evidence was made.
 
-The bundled data ships hard argmax predictions only, so the evidence is DERIVED: one-hot with
-magnitude ~evidence_magnitude on the class given by the class table's learning_map. It is not a
-network's evidential output, and every output says so.
+The bundled data ships hard argmax predictions only. ~evidence chooses how they become evidence:
+  learned  the learned evidence head (docs/learned_evidence.md), run in C++ through ctypes on the
+           package's libevidential_octomap.so: a small evidential model on each scan's geometry and
+           predictions, CROSS-FITTED (a scan's evidence never comes from a model that saw its
+           labels); ~learned_model (default: config/learned/<dataset>.model);
+  onehot   DERIVED: one-hot of magnitude ~evidence_magnitude on the predicted class.
+Every output says which (~evidence_source).
 """
+import ctypes
 import os
 import sys
 
@@ -37,7 +42,34 @@ def load_class_table(path):
     lut = np.full(1 << 16, -1, dtype=np.int32)
     for raw, cls in table["learning_map"].items():
         lut[int(raw)] = int(cls)
-    return names, lut
+    return names, lut, table.get("dataset", "")
+
+
+def learned_evidence_function(model_path, num_classes):
+    """evidence(xyzr, classes) -> N x C float32 by the core library's C entry point."""
+    try:
+        lib = ctypes.CDLL("libevidential_octomap.so")
+    except OSError as e:
+        raise RuntimeError("learned evidence needs libevidential_octomap.so of this package on the "
+                           "library path (source the catkin workspace's devel/setup.bash): %s" % e)
+    fn = lib.evidential_octomap_learned_evidence
+    floats = ctypes.POINTER(ctypes.c_float)
+    fn.restype = ctypes.c_int
+    fn.argtypes = [ctypes.c_char_p, floats, floats, ctypes.POINTER(ctypes.c_int32), ctypes.c_size_t,
+                   ctypes.c_int, floats, ctypes.c_char_p, ctypes.c_size_t]
+
+    def evidence(xyzr, classes):
+        xyz = np.ascontiguousarray(xyzr[:, :3], dtype=np.float32)
+        remission = np.ascontiguousarray(xyzr[:, 3], dtype=np.float32)
+        predicted = np.ascontiguousarray(classes, dtype=np.int32)
+        out = np.empty((len(predicted), num_classes), dtype=np.float32)
+        error = ctypes.create_string_buffer(1024)
+        if fn(model_path.encode(), xyz.ctypes.data_as(floats), remission.ctypes.data_as(floats),
+              predicted.ctypes.data_as(ctypes.POINTER(ctypes.c_int32)), len(predicted), num_classes,
+              out.ctypes.data_as(floats), error, len(error)) != 0:
+            raise RuntimeError("learned evidence: %s" % error.value.decode())
+        return out
+    return evidence
 
 
 def read_calib_tr(path):
@@ -141,6 +173,8 @@ def main():
     classes = get_param("~classes", "") or default_path("config/classes_semantickitti.yaml")
     labels_dir = get_param("~labels_dir", "predictions")
     magnitude = float(get_param("~evidence_magnitude", 20.0))
+    evidence_kind = get_param("~evidence", "onehot")
+    learned_model = get_param("~learned_model", "")
     rate = float(get_param("~rate", 1.0))
     loop = bool(get_param("~loop", False))
     bag_path = get_param("~bag", "")
@@ -150,15 +184,25 @@ def main():
     count = int(get_param("~count", -1))
     start_delay = float(get_param("~start_delay", 1.0))
 
-    names, lut = load_class_table(classes)
+    names, lut, dataset = load_class_table(classes)
     num_classes = len(names)
+    if evidence_kind not in ("onehot", "learned"):
+        raise RuntimeError("~evidence must be onehot or learned, not %r" % evidence_kind)
     tr = read_calib_tr(os.path.join(data, "calib.txt"))
     poses = read_poses(os.path.join(data, "poses.txt"), tr)
     scans = sorted(f[:-4] for f in os.listdir(os.path.join(data, "velodyne")) if f.endswith(".bin"))
     scans = scans[first:] if count < 0 else scans[first:first + count]
-    source = ("derived: one-hot evidence of magnitude %g from the hard predictions in %s/ "
-              "(raw ids -> %d classes via %s); not a network's evidential output"
-              % (magnitude, labels_dir, num_classes, os.path.basename(classes)))
+    if evidence_kind == "learned":
+        learned_model = learned_model or os.path.join(os.path.dirname(classes), "learned",
+                                                      dataset + ".model")
+        learned = learned_evidence_function(learned_model, num_classes)
+        source = ("learned (cross-fitted): evidential MLP on each scan's geometry and the hard "
+                  "predictions in %s/, each scan's evidence from the model fold(s) not trained on "
+                  "its labels (model %s)" % (labels_dir, learned_model))
+    else:
+        source = ("derived: one-hot evidence of magnitude %g from the hard predictions in %s/ "
+                  "(raw ids -> %d classes via %s); not a network's evidential output"
+                  % (magnitude, labels_dir, num_classes, os.path.basename(classes)))
     log = print if offline else rospy.loginfo
     (print if offline else rospy.logwarn)(
         "play_semantickitti: %d scans from %s; evidence is %s" % (len(scans), data, source))
@@ -172,8 +216,11 @@ def main():
         if (cls < 0).any():
             raise RuntimeError("%s: raw label %d is not in the learning map of %s"
                                % (name, int(raw[cls < 0][0]), classes))
-        evidence = np.zeros((xyzr.shape[0], num_classes), dtype=np.float32)
-        evidence[np.arange(xyzr.shape[0]), cls] = magnitude
+        if evidence_kind == "learned":
+            evidence = learned(xyzr, cls)
+        else:
+            evidence = np.zeros((xyzr.shape[0], num_classes), dtype=np.float32)
+            evidence[np.arange(xyzr.shape[0]), cls] = magnitude
         header = Header(stamp=stamp, frame_id=sensor)
         return make_cloud(xyzr[:, :3], evidence, header), make_tf(poses[int(name)], stamp, world, sensor)
 
