@@ -329,7 +329,7 @@ void addCompareCommand(CLI::App& app) {
   cmd->add_option("--sources", o->sources,
                   "Evidence sources (file, onehot, knn-vote, confusion, learned)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"file", "onehot", "knn-vote", "confusion"}))
+      ->check(CLI::IsMember({"file", "onehot", "knn-vote", "confusion", "learned"}))
       ->capture_default_str();
   cmd->add_option("--protocols", o->protocols, "reconstruction and/or held-out")
       ->delimiter(',')

@@ -80,9 +80,7 @@ std::string describeEvidence(const EvidenceOptions& o) {
       s << ", E=" << o.magnitude << ", leave-one-scan-out";
       break;
     case EvidenceSource::kLearned:
-      s << " (cross-fitted: each scan's evidence from the model fold(s) not trained on it; "
-        << "evidential MLP on geometry and the hard predictions, model " << o.learned_model
-        << ")";
+      s << " (cross-fitted; model " << o.learned_model << ")";
       return s.str();
   }
   s << " (derived from hard labels)";
