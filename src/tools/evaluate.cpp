@@ -31,7 +31,10 @@ void runEval(const EvalOptions& o) {
                              " classes, " + o.map + " has " +
                              std::to_string(tree->numClasses()));
   }
-  const Dataset dataset = Dataset::open(o.data, classes);
+  EvidenceOptions ev = o.evidence;
+  finishEvidenceOptions(o.evidence_name, o.classes, classes, &ev);
+  const Dataset dataset = Dataset::open(o.data, classes, ev.conversion);
+  ev.files = dataset.describeEvidenceFiles();
   std::vector<Scan> scans = loadScans(dataset, o.scans, true);
   std::string predictions_note;
   if (o.synthetic) {
@@ -41,8 +44,6 @@ void runEval(const EvalOptions& o) {
   }
   const Protocol protocol = makeProtocol(o.protocol, scans.size());
   // The input row: the per-point evidence of the query scans, derived as `map` derives it.
-  EvidenceOptions ev = o.evidence;
-  finishEvidenceOptions(o.evidence_name, &ev);
   std::vector<std::vector<float>> evidence;
   std::vector<float> query_evidence;
   std::string input_description = "input predictions (hard labels), per point";
