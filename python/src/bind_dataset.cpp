@@ -92,9 +92,13 @@ void bindDataset(nb::module_& m) {
   nb::class_<Dataset>(m, "Dataset",
                       "A SemanticKITTI-layout sequence (velodyne/, labels/, predictions/, "
                       "evidence/ or alpha/, poses.txt, calib.txt) or a single pose-less scan.")
-      .def_static("open", &Dataset::open, nb::arg("path"), nb::arg("classes"),
-                  nb::keep_alive<0, 2>(),
-                  "Raises RuntimeError naming the path when the layout is not recognised.")
+      .def_static(
+          "open",
+          [](const std::string& path, const ClassTable& classes) {
+            return Dataset::open(path, classes);  // logits/ probabilities/: default conversion
+          },
+          nb::arg("path"), nb::arg("classes"), nb::keep_alive<0, 2>(),
+          "Raises RuntimeError naming the path when the layout is not recognised.")
       .def_prop_ro("path", &Dataset::path)
       .def_prop_ro("stems", &Dataset::stems)
       .def_prop_ro("has_labels", &Dataset::hasLabels)

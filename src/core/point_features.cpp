@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include "neighbour_grid.h"
+#include "evidential_octomap/neighbour_grid.h"
 
 namespace evidential_octomap {
 

@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "evidential_octomap/neighbour_grid.h"
+
 namespace evidential_octomap::tools {
 
 namespace {
@@ -165,55 +167,17 @@ std::vector<float> knnVoteEvidence(const std::vector<Eigen::Vector3f>& points,
   }
   if (k < 1 || radius <= 0.0) throw std::invalid_argument("knnVoteEvidence: k >= 1, radius > 0");
   const size_t N = points.size();
-  const float inv = float(1.0 / radius);
-  const float r2 = float(radius * radius);
-  auto cellOf = [&](const Eigen::Vector3f& p) {
-    return Eigen::Vector3i(int(std::floor(p.x() * inv)), int(std::floor(p.y() * inv)),
-                           int(std::floor(p.z() * inv)));
-  };
-  auto hashOf = [](const Eigen::Vector3i& c) {
-    return (uint64_t(uint32_t(c.x()) & 0x1FFFFF) << 42) |
-           (uint64_t(uint32_t(c.y()) & 0x1FFFFF) << 21) | uint64_t(uint32_t(c.z()) & 0x1FFFFF);
-  };
-  // Bucket the points: sort indices by cell, then one [begin, end) range per cell.
-  std::vector<std::pair<uint64_t, uint32_t>> keyed(N);
-  for (size_t i = 0; i < N; ++i) keyed[i] = {hashOf(cellOf(points[i])), uint32_t(i)};
-  std::sort(keyed.begin(), keyed.end());
-  std::unordered_map<uint64_t, std::pair<uint32_t, uint32_t>> cells;
-  cells.reserve(N / 2 + 1);
-  for (size_t b = 0; b < N;) {
-    size_t e = b;
-    while (e < N && keyed[e].first == keyed[b].first) ++e;
-    cells.emplace(keyed[b].first, std::make_pair(uint32_t(b), uint32_t(e)));
-    b = e;
-  }
-
+  const NeighbourGrid grid(N ? points.front().data() : nullptr, N, float(radius));
   std::vector<float> evidence(N * size_t(num_classes), 0.0f);
-  std::vector<std::pair<float, int>> candidates;
+  std::vector<std::pair<float, uint32_t>> candidates;
   std::vector<int> votes(num_classes, 0);
   for (size_t i = 0; i < N; ++i) {
-    candidates.clear();
-    const Eigen::Vector3f& p = points[i];
-    const Eigen::Vector3i c = cellOf(p);
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          const auto it = cells.find(hashOf(c + Eigen::Vector3i(dx, dy, dz)));
-          if (it == cells.end()) continue;
-          for (uint32_t s = it->second.first; s < it->second.second; ++s) {
-            const uint32_t j = keyed[s].second;
-            const float d2 = (points[j] - p).squaredNorm();
-            if (d2 <= r2) candidates.emplace_back(d2, predicted[j]);
-          }
-        }
-    if (int(candidates.size()) > k) {
-      std::nth_element(candidates.begin(), candidates.begin() + (k - 1), candidates.end());
-      candidates.resize(k);
-    }
+    grid.nearest(i, k, &candidates);
     const int n = int(candidates.size());  // >= 1: the point itself
     std::fill(votes.begin(), votes.end(), 0);
     for (const auto& cand : candidates) {
-      if (cand.second >= 0 && cand.second < num_classes) ++votes[cand.second];
+      const int c = predicted[cand.second];
+      if (c >= 0 && c < num_classes) ++votes[c];
     }
     for (int cls = 0; cls < num_classes; ++cls) {
       if (votes[cls] == 0) continue;
@@ -267,8 +231,7 @@ std::vector<float> deriveEvidence(const Scan& scan, size_t scan_index,
       requirePredictions(scan, "learned");
       if (learned == nullptr) throw std::runtime_error("learned evidence needs a loaded model");
       if (learned->numClasses() != num_classes) {
-        throw std::runtime_error(learned->path() + " has " +
-                                 std::to_string(learned->numClasses()) +
+        throw std::runtime_error(learned->path() + " has " + std::to_string(learned->numClasses()) +
                                  " classes, the class table " + std::to_string(num_classes));
       }
       try {

@@ -82,7 +82,7 @@ ScanInput scanInput(const Scan& scan);
 
 std::vector<float> oneHotEvidence(const std::vector<int>& predicted, int num_classes,
                                   float magnitude);
-// O(N) grid search: points hashed into cells of size `radius`, neighbours from the 27 cells.
+// The k nearest within `radius` by NeighbourGrid (evidential_octomap/neighbour_grid.h).
 std::vector<float> knnVoteEvidence(const std::vector<Eigen::Vector3f>& points,
                                    const std::vector<int>& predicted, int num_classes, int k,
                                    double radius, float magnitude);

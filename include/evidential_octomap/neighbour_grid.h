@@ -1,5 +1,6 @@
 // k-nearest neighbours within a radius, by a hash grid of cells of that radius: the query scans
-// the 27 cells around a point. O(N) build, no dependency; fine for one LiDAR scan.
+// the 27 cells around a point. O(N) build, no dependency; fine for one LiDAR scan. The one kNN of
+// the project: the learned evidence's point features and the derived knn-vote evidence use it.
 #pragma once
 
 #include <cstddef>
