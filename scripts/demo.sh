@@ -83,9 +83,9 @@ show_pictures() {
 run_map() {
   local dir="${out}/demo" t0=${SECONDS}
   rm -rf "${dir}"
-  note "map: ${cli} map --data ${data} --classes ${classes} --out ${dir}"
+  note "map: ${cli} map --data ${data} --classes ${classes} --evidence learned --out ${dir}"
   # It prints the metrics (the content of metrics.md) when it is done.
-  "${cli}" map --data "${data}" --classes "${classes}" --out "${dir}" --scans "${scans}"
+  "${cli}" map --data "${data}" --classes "${classes}" --evidence learned --out "${dir}" --scans "${scans}"
   echo "demo.sh: mapped and evaluated in $((SECONDS - t0)) s"
 
   local missing=0
