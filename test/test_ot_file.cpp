@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <memory>
 #include <random>
 #include <set>
@@ -588,6 +589,53 @@ TEST(Merge, UnobservedEvidenceIsEmptyWhenTheKernelCreatesLeaves) {
   EXPECT_THROW(map.insertSemanticScan(s.points_W, s.evidence, s.origin_W, &wrong_c),
                std::invalid_argument);
   EXPECT_THROW(map.addEvidence(wrong_c, nullptr), std::invalid_argument);
+}
+
+TEST(Merge, UnclampedChunksEqualTheSequentialMapClampedAtTheEnd) {
+  // Repeated scans drive log-odds past both clamping bounds, where clamping order matters.
+  const auto walk = walkingScans();
+  const std::vector<const test::SyntheticScan*> scans{&walk[0], &walk[0], &walk[0], &walk[0],
+                                                      &walk[0], &walk[0], &walk[1], &walk[1],
+                                                      &walk[2], &walk[2]};
+  const float unbounded = std::numeric_limits<float>::max();
+  auto build = [&](size_t first, size_t last) {
+    auto map = std::make_unique<EvidentialOcTree>(0.2, 3);
+    map->setClampingThresLog(-unbounded, unbounded);
+    for (size_t i = first; i < last; ++i) {
+      map->insertSemanticScan(scans[i]->points_W, scans[i]->evidence, scans[i]->origin_W);
+    }
+    return map;
+  };
+  const EvidentialOcTree defaults(0.2, 3);
+  const auto clampAsOctoMap = [&](EvidentialOcTree* map) {
+    map->setClampingThresMin(defaults.getClampingThresMin());
+    map->setClampingThresMax(defaults.getClampingThresMax());
+    map->clampOccupancy();
+  };
+  const auto sequential = build(0, scans.size());
+  clampAsOctoMap(sequential.get());
+  auto merged = build(0, 6);
+  merged->merge(*build(6, scans.size()));
+  clampAsOctoMap(merged.get());
+  EvidentialOcTree clamped_each_scan(0.2, 3);  // OctoMap's own order of clamping differs
+  for (const auto* scan : scans) {
+    clamped_each_scan.insertSemanticScan(scan->points_W, scan->evidence, scan->origin_W);
+  }
+  size_t differ = 0;
+  for (auto it = clamped_each_scan.begin_leafs(); it != clamped_each_scan.end_leafs(); ++it) {
+    differ += std::fabs(merged->search(it.getKey())->getLogOdds() - it->getLogOdds()) > 1e-3f;
+  }
+  EXPECT_GT(differ, 100u);
+  size_t at_bounds = 0;
+  for (auto it = sequential->begin_leafs(); it != sequential->end_leafs(); ++it) {
+    const EvidentialOcTreeNode* other = merged->search(it.getKey());
+    ASSERT_NE(other, nullptr);
+    EXPECT_NEAR(other->getLogOdds(), it->getLogOdds(), 1e-4f);
+    at_bounds += it->getLogOdds() >= sequential->getClampingThresMaxLog() ||
+                 it->getLogOdds() <= sequential->getClampingThresMinLog();
+  }
+  EXPECT_GT(at_bounds, 100u);
+  EXPECT_THROW(merged->setClampingThresLog(1.0f, 2.0f), std::invalid_argument);
 }
 
 TEST(Merge, MismatchedMapsThrowAndChangeNothing) {

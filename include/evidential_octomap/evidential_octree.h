@@ -173,6 +173,12 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // of a sequence built with `unobserved` maps, earlier.addEvidence(later_unobserved, &rest)
   // before earlier.merge(later) gives exactly the sequentially built map.
   void addEvidence(const EvidentialOcTree& evidence, EvidentialOcTree* rest);
+  // Occupancy clamping bounds in log-odds. OctoMap's setters take probabilities, which cannot
+  // say "unbounded": chunk maps that are merged later may keep unbounded log-odds
+  // (-FLT_MAX, FLT_MAX), so the merged map is clamped once, at the end (clampOccupancy).
+  void setClampingThresLog(float min_log_odds, float max_log_odds);
+  // Clamps every node's log-odds to the current bounds, then recomputes inner nodes and prunes.
+  void clampOccupancy();
   // Rebuilds the payload pool from the nodes that are still in the tree (after deleteNode).
   void compactPayloads();
 

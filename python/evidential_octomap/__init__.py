@@ -7,7 +7,7 @@ into an OctoMap whose voxels carry Dempster-Shafer belief masses and an uncertai
     import evidential_octomap as eo
     tree = eo.EvidentialOcTree(0.2, eo.bundled_class_table("semantickitti"))
     tree.insert_scan(points_S, evidence, pose=T_W_S)
-    answer = tree.query(points_W)   # labels, belief, uncertainty, occupied, known
+    answer = tree.query(points_W)   # labels, belief, uncertainty, conflict, occupied, known
     tree.save("map.ot")
 
 Batch mapping of long sequences on Dask: ``python -m evidential_octomap.batch --help``.
@@ -21,6 +21,7 @@ from ._core import (
     EvidentialOcTree,
     InsertStats,
     Leaves,
+    ErrorDetection,
     MapMetrics,
     QualityMetrics,
     QueryResult,
@@ -28,7 +29,7 @@ from ._core import (
     SemanticConfig,
     derive_evidence,
     evaluate_map,
-    evaluate_predictions,
+    evaluate_input,
     evidence_is_derived,
 )
 
@@ -39,6 +40,7 @@ __all__ = [
     "EvidentialOcTree",
     "InsertStats",
     "Leaves",
+    "ErrorDetection",
     "MapMetrics",
     "QualityMetrics",
     "QueryResult",
@@ -47,7 +49,7 @@ __all__ = [
     "bundled_class_table",
     "derive_evidence",
     "evaluate_map",
-    "evaluate_predictions",
+    "evaluate_input",
     "evidence_is_derived",
     "load",
 ]

@@ -24,6 +24,8 @@ from typing import Callable, Optional, Sequence
 from ._core import ClassTable, Dataset, EvidentialOcTree, SemanticConfig, derive_evidence
 from ._core import evidence_is_derived
 
+FLT_MAX = 3.4028234663852886e38  # largest float: "unbounded" log-odds that still save as .ot
+
 
 @dataclass(frozen=True)
 class MappingJob:
@@ -35,6 +37,9 @@ class MappingJob:
     config: dict = field(default_factory=dict)  # SemanticConfig fields by name
     evidence: str = "onehot"
     magnitude: float = 20.0
+    # Chunk maps keep unbounded occupancy log-odds and the merged map is clamped once at the end,
+    # so occupancy does not depend on the chunking (OctoMap clamps after every scan instead).
+    unclamped: bool = False
 
     def semantic_config(self) -> SemanticConfig:
         return SemanticConfig(**self.config)
@@ -63,6 +68,8 @@ def map_chunk(job: MappingJob, start: int, stop: int) -> ChunkMap:
     dataset = Dataset.open(job.data, classes)
     config = job.semantic_config()
     tree = EvidentialOcTree(job.resolution, classes, config)
+    if job.unclamped:
+        tree.set_clamping_thres_log(-FLT_MAX, FLT_MAX)
     unobserved = EvidentialOcTree(job.resolution, classes, config)
     for i in range(start, stop):
         scan = dataset.load(i)
@@ -81,6 +88,15 @@ def merge_in_order(earlier: ChunkMap, later: ChunkMap) -> ChunkMap:
     earlier.tree.merge(later.tree)
     earlier.unobserved.merge(rest)
     return ChunkMap(earlier.first_scan, later.last_scan, earlier.tree, earlier.unobserved)
+
+
+def reduce_in_pairs(items: list, combine: Callable):
+    """Combines neighbours level by level, ((0 1)(2 3))(4 ..): a merge tree whose shape depends on
+    len(items) only. `combine` may return futures (the levels then run on the workers)."""
+    while len(items) > 1:
+        paired = [combine(items[i], items[i + 1]) for i in range(0, len(items) - 1, 2)]
+        items = paired + ([items[-1]] if len(items) % 2 else [])
+    return items[0]
 
 
 class Progress:
@@ -122,20 +138,31 @@ def map_sequence(client, job: MappingJob, scans: Optional[int] = None, chunk_siz
         raise ValueError(f"no scans to map in {job.data}")
     ranges = chunk_ranges(count, chunk_size)
     bar = Progress(len(ranges), progress)
-    level = [client.submit(chunk_fn, job, start, stop, retries=retries, pure=False)
-             for start, stop in ranges]
-    watch = as_completed(level)
-    merges = set()
-    while len(level) > 1:  # neighbours pair up level by level: a tree fixed by the chunk count
-        pairs = [client.submit(merge_in_order, level[i], level[i + 1], retries=retries, pure=False)
-                 for i in range(0, len(level) - 1, 2)]
-        merges.update(f.key for f in pairs)
-        watch.update(pairs)
-        level = pairs + ([level[-1]] if len(level) % 2 else [])
-    for future in watch:
-        is_merge = future.key in merges
+    chunks = [client.submit(chunk_fn, job, start, stop, retries=retries, pure=False)
+              for start, stop in ranges]
+    merges = []
+
+    def submit_merge(earlier, later):
+        merges.append(client.submit(merge_in_order, earlier, later, retries=retries, pure=False))
+        return merges[-1]
+
+    result = reduce_in_pairs(chunks, submit_merge)
+    merge_keys = {f.key for f in merges}
+    for future in as_completed(chunks + merges):
+        is_merge = future.key in merge_keys
         bar.update(merged=int(is_merge), mapped=int(not is_merge))
-    return level[0].result().tree
+    tree = result.result().tree
+    if job.unclamped:
+        clamp_as_octomap(tree)
+    return tree
+
+
+def clamp_as_octomap(tree: EvidentialOcTree) -> None:
+    """Clamps an unclamped map's log-odds to OctoMap's default bounds."""
+    defaults = EvidentialOcTree(tree.resolution)
+    tree.clamping_thres_min = defaults.clamping_thres_min
+    tree.clamping_thres_max = defaults.clamping_thres_max
+    tree.clamp_occupancy()
 
 
 def local_client(workers: Optional[int]):
@@ -173,6 +200,9 @@ def parse_arguments(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         "'onehot' (default) or 'knn-vote'")
     p.add_argument("-E", "--evidence-magnitude", type=float, default=20.0,
                    help="E of derived evidence (default 20)")
+    p.add_argument("--unclamped-merge", action="store_true",
+                   help="keep chunk maps' occupancy unclamped and clamp once after the merge: "
+                        "occupancy then does not depend on the chunking")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a SemanticConfig parameter, e.g. --set rule=sbki --set max_range=50")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -196,7 +226,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parse_arguments(argv)
     job = MappingJob(data=os.path.abspath(args.data), classes=os.path.abspath(args.classes),
                      resolution=args.resolution, config=config_overrides(args.set),
-                     evidence=args.evidence, magnitude=args.evidence_magnitude)
+                     evidence=args.evidence, magnitude=args.evidence_magnitude,
+                     unclamped=args.unclamped_merge)
     from distributed import Client
 
     start = time.monotonic()

@@ -40,6 +40,10 @@ void bindConfig(nb::module_& m) {
       .def_rw("reference_compat", &SemanticConfig::reference_compat,
               "gamma = 0, as the authors' released code.")
       .def_rw("sbki_prior", &SemanticConfig::sbki_prior)
+      .def_rw("downsampling", &SemanticConfig::downsampling,
+              "'average' (per cell of resolution / ds_multiplier) or 'count_cap' (the authors').")
+      .def_rw("kernel_distance", &SemanticConfig::kernel_distance,
+              "'voxel' (distance to the voxel's cube) or 'centre'.")
       .def_rw("ds_multiplier", &SemanticConfig::ds_multiplier,
               "Semantic down-sampling grid = resolution / ds_multiplier (<= 0: off).")
       .def_rw("max_range", &SemanticConfig::max_range, "Max sensor range [m]; < 0: unlimited.")

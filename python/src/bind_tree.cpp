@@ -24,6 +24,7 @@ struct QueryResult {
   Array<int32_t> labels;     // (N,) argmax class, -1 without semantic evidence
   Array<float> belief;       // (N, C)
   Array<float> uncertainty;  // (N,)
+  Array<float> conflict;     // (N,)
   Array<bool> occupied;      // (N,) the voxel is known and occupied
   Array<bool> known;         // (N,) the voxel exists in the map (observed)
 };
@@ -35,6 +36,7 @@ struct Leaves {
   Array<float> occupancy;    // (M,) probability
   Array<int32_t> labels;     // (M,)
   Array<float> uncertainty;  // (M,)
+  Array<float> conflict;     // (M,)
   Array<float> belief;       // (M, C)
 };
 
@@ -72,7 +74,7 @@ QueryResult query(const EvidentialOcTree& tree, const PointsIn& points) {
   const size_t n = points.shape(0);
   const int num_classes = tree.numClasses();
   std::vector<int32_t> labels(n);
-  std::vector<float> belief(n * num_classes), uncertainty(n);
+  std::vector<float> belief(n * num_classes), uncertainty(n), conflict(n);
   std::vector<uint8_t> occupied(n), known(n);
   {
     nb::gil_scoped_release release;
@@ -84,19 +86,21 @@ QueryResult query(const EvidentialOcTree& tree, const PointsIn& points) {
       const VoxelOpinion o = tree.opinion(node);
       labels[i] = o.label;
       uncertainty[i] = o.uncertainty;
+      conflict[i] = o.conflict;
       std::copy(o.belief.begin(), o.belief.end(), belief.begin() + i * num_classes);
       known[i] = node != nullptr;
       occupied[i] = node != nullptr && tree.isNodeOccupied(node);
     }
   }
-  return {toNumpy(std::move(labels), {n}), toNumpy(std::move(belief), {n, size_t(num_classes)}),
-          toNumpy(std::move(uncertainty), {n}), toNumpyBool(std::move(occupied)),
-          toNumpyBool(std::move(known))};
+  return {
+      toNumpy(std::move(labels), {n}),      toNumpy(std::move(belief), {n, size_t(num_classes)}),
+      toNumpy(std::move(uncertainty), {n}), toNumpy(std::move(conflict), {n}),
+      toNumpyBool(std::move(occupied)),     toNumpyBool(std::move(known))};
 }
 
 Leaves leaves(const EvidentialOcTree& tree, bool occupied_only) {
   const int num_classes = tree.numClasses();
-  std::vector<float> centers, sizes, occupancy, uncertainty, belief;
+  std::vector<float> centers, sizes, occupancy, uncertainty, conflict, belief;
   std::vector<int32_t> labels;
   {
     nb::gil_scoped_release release;
@@ -109,14 +113,18 @@ Leaves leaves(const EvidentialOcTree& tree, bool occupied_only) {
       const VoxelOpinion o = tree.opinion(&*it);
       labels.push_back(o.label);
       uncertainty.push_back(o.uncertainty);
+      conflict.push_back(o.conflict);
       belief.insert(belief.end(), o.belief.begin(), o.belief.end());
     }
   }
   const size_t m = sizes.size();
-  return {
-      toNumpy(std::move(centers), {m, 3}),  toNumpy(std::move(sizes), {m}),
-      toNumpy(std::move(occupancy), {m}),   toNumpy(std::move(labels), {m}),
-      toNumpy(std::move(uncertainty), {m}), toNumpy(std::move(belief), {m, size_t(num_classes)})};
+  return {toNumpy(std::move(centers), {m, 3}),
+          toNumpy(std::move(sizes), {m}),
+          toNumpy(std::move(occupancy), {m}),
+          toNumpy(std::move(labels), {m}),
+          toNumpy(std::move(uncertainty), {m}),
+          toNumpy(std::move(conflict), {m}),
+          toNumpy(std::move(belief), {m, size_t(num_classes)})};
 }
 
 nb::bytes toBytes(const EvidentialOcTree& tree) {
@@ -158,6 +166,9 @@ void bindResults(nb::module_& m) {
               "(N, C) float32: dempster belief masses; sbki/ebs expected probabilities.")
       .def_ro("uncertainty", &QueryResult::uncertainty, kShared,
               "(N,) float32: dempster mass u; sbki/ebs Dirichlet variance of the label.")
+      .def_ro("conflict", &QueryResult::conflict, kShared,
+              "(N,) float32 in [0, 1): share of the fused evidence that disagreed "
+              "(VoxelOpinion::conflict).")
       .def_ro("occupied", &QueryResult::occupied, kShared,
               "(N,) bool: the voxel is known and occupied.")
       .def_ro("known", &QueryResult::known, kShared, "(N,) bool: the voxel has been observed.");
@@ -167,6 +178,7 @@ void bindResults(nb::module_& m) {
       .def_ro("occupancy", &Leaves::occupancy, kShared, "(M,) float32 occupancy probability.")
       .def_ro("labels", &Leaves::labels, kShared, "(M,) int32 argmax class, -1 without evidence.")
       .def_ro("uncertainty", &Leaves::uncertainty, kShared, "(M,) float32.")
+      .def_ro("conflict", &Leaves::conflict, kShared, "(M,) float32.")
       .def_ro("belief", &Leaves::belief, kShared, "(M, C) float32.");
   nb::class_<InsertStats>(m, "InsertStats", "What one insert_scan did.")
       .def_ro("points_in", &InsertStats::points_in)
@@ -256,6 +268,12 @@ void bindTree(nb::module_& m) {
       .def_prop_rw("clamping_thres_max", &Tree::getClampingThresMax, &Tree::setClampingThresMax)
       .def_prop_rw("occupancy_thres", &Tree::getOccupancyThres,
                    nb::overload_cast<double>(&Tree::setOccupancyThres))
+      .def("set_clamping_thres_log", &Tree::setClampingThresLog, nb::arg("min_log_odds"),
+           nb::arg("max_log_odds"),
+           "Clamping bounds in log-odds; (-3.4e38, 3.4e38) keeps log-odds unbounded (chunk maps "
+           "merged later, then clamp_occupancy).")
+      .def("clamp_occupancy", &Tree::clampOccupancy,
+           "Clamps every node's log-odds to the current bounds.")
       // --- size
       .def_prop_ro("num_nodes", &Tree::size)
       .def_prop_ro("num_leaves", [](const Tree& t) { return t.getNumLeafNodes(); })

@@ -11,7 +11,7 @@ EXAMPLE = REPO / "examples" / "map_bundled_scans.py"
 
 def test_example_maps_the_bundled_scans(tmp_path):
     assert len(EXAMPLE.read_text().splitlines()) <= 20
-    out = subprocess.run([sys.executable, str(EXAMPLE), str(tmp_path / "map.ot")], check=True,
+    out = subprocess.run([sys.executable, str(EXAMPLE), str(tmp_path / "map.ot"), "2"], check=True,
                          capture_output=True, text=True).stdout
     found = re.fullmatch(r"(\d+) leaves; coverage ([\d.]+)% mIoU ([\d.]+)% Acc ([\d.]+)%\n", out)
     assert found, out

@@ -41,34 +41,40 @@ def test_dataset_reader(kitti, kitti_scans):
 
 def test_map_metrics_equal_a_numpy_recomputation(kitti_scans, kitti_classes):
     tree = mapped(kitti_scans, kitti_classes, 2)
-    scan, _ = kitti_scans[2]
+    scan, evidence = kitti_scans[2]
     keep = scan.gt != kitti_classes.ignore_class
     points, gt = scan.points_world()[keep], scan.gt[keep]
-    metrics = eo.evaluate_map(tree, points, gt, scan.predicted[keep], kitti_classes.ignore_class)
+    metrics = eo.evaluate_map(tree, points, gt, kitti_classes.ignore_class)
     answer = tree.query(points)
     labelled = answer.labels >= 0
-    q = metrics.quality
-    assert q.queries == len(gt) and q.labelled == labelled.sum()
+    quality = metrics.quality
+    assert quality.queries == len(gt) and quality.labelled == labelled.sum()
     assert metrics.occupied == answer.occupied.sum()
+    assert metrics.occupancy_coverage == pytest.approx(answer.occupied.mean())
     assert metrics.semantic_coverage == pytest.approx(labelled.mean())
-    # Every query counts; a query whose voxel holds no evidence is wrong.
-    assert q.acc_all == pytest.approx((answer.labels == gt).mean())
+    assert quality.acc_all == pytest.approx((answer.labels == gt).mean())
+    assert quality.acc_labelled == pytest.approx((answer.labels == gt)[labelled].mean())
     ious = []
-    for c in range(kitti_classes.num_classes):
-        if c == kitti_classes.ignore_class or not (gt == c).any():
-            continue
+    for c in np.unique(gt):
         tp = ((answer.labels == c) & (gt == c)).sum()
         ious.append(tp / ((answer.labels == c) | (gt == c)).sum())
-    assert q.miou_all == pytest.approx(np.mean(ious))
-    assert q.confusion_all.sum() == len(gt)
+    assert quality.miou_all == pytest.approx(np.mean(ious))
+    assert quality.confusion_all.sum() == len(gt)
+    assert quality.confusion_all[:, -1].sum() == (~labelled).sum()
     # Brier of the projected probabilities b + u / C (uniform without a label).
     p = answer.belief + answer.uncertainty[:, None] / 20
     p[~labelled] = 1.0 / 20
-    onehot = np.eye(20)[gt]
-    assert q.brier == pytest.approx(((p - onehot) ** 2).sum(axis=1).mean(), rel=1e-4)
-    assert set(q.error_detection) == {"u", "conflict", "1-max_p", "dissonance"}
-    inputs = eo.evaluate_predictions(gt, scan.predicted[keep], 20, kitti_classes.ignore_class)
-    assert inputs.acc_all == pytest.approx((scan.predicted[keep] == gt).mean())
+    assert quality.brier == pytest.approx(((p - np.eye(20)[gt]) ** 2).sum(axis=1).mean(), rel=1e-4)
+    assert list(quality.error_detection) == ["u", "conflict", "1-max_p", "dissonance"]
+    assert 0 <= quality.error_detection["u"].auroc <= 1
+    predicted = scan.predicted[keep]
+    hard = eo.evaluate_input(gt, predicted, num_classes=20, ignore_class=kitti_classes.ignore_class)
+    assert hard.acc_all == pytest.approx((predicted == gt).mean())
+    soft = eo.evaluate_input(gt, evidence=evidence[keep], num_classes=20,
+                             ignore_class=kitti_classes.ignore_class)
+    assert soft.acc_all == pytest.approx((evidence[keep].argmax(axis=1) == gt).mean())
+    with pytest.raises(ValueError, match="predicted classes or its evidence"):
+        eo.evaluate_input(gt, num_classes=20)
 
 
 def cli_binary():

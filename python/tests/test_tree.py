@@ -26,6 +26,18 @@ def test_wall_voxels_take_the_class_of_their_evidence():
     # A subjective opinion: beliefs and uncertainty sum to one, u in (0, 1).
     np.testing.assert_allclose(answer.belief.sum(axis=1) + answer.uncertainty, 1.0, atol=1e-5)
     assert ((answer.uncertainty > 0) & (answer.uncertainty < 1)).all()
+    # Every point brought the same class evidence: little of it disagreed.
+    assert ((answer.conflict >= 0) & (answer.conflict < 0.5)).all()
+
+
+def test_disagreeing_evidence_raises_the_conflict():
+    tree = eo.EvidentialOcTree(0.2, 3)
+    points, car = wall(label=1)
+    tree.insert_scan(points, car, origin=ORIGIN)
+    agreeing = tree.query(points).conflict.copy()
+    _, vegetation = wall(label=2)
+    tree.insert_scan(points, vegetation, origin=ORIGIN)
+    assert (tree.query(points).conflict > agreeing + 0.1).all()
 
 
 def test_free_space_in_front_of_the_wall_is_known_and_free():

@@ -1,5 +1,12 @@
-"""Merged (in-order or plain, chunks of K scans) vs sequential map on the bundled scans: the
-equality figures of docs/python.md. Usage: python python/tools/merge_equality.py K [K ...]"""
+"""Merged vs sequential map on the bundled scans: the equality figures of docs/python.md.
+
+    python python/tools/merge_equality.py 5 1      # chunk sizes to try
+
+For each chunk size: the plain merge, the in-order merge (batch.merge_in_order), and the
+in-order merge of unclamped chunk maps clamped at the end, each against the sequential map
+(OctoMap clamping after every scan) and the sequential map clamped only at the end.
+"""
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -7,24 +14,59 @@ import numpy as np
 
 import evidential_octomap as eo
 from evidential_octomap import batch
+
 REPO = Path(__file__).resolve().parents[2]
-job = batch.MappingJob(data=f"{REPO}/data/semantickitti_08_first10", classes=f"{REPO}/config/classes_semantickitti.yaml")
-n = 10
-seq = batch.map_chunk(job, 0, n).tree
-ds = eo.Dataset.open(job.data, eo.ClassTable.load(job.classes))
-points = np.concatenate([ds.load(i).points_world() for i in range(n)])
-a = seq.query(points)
-L = seq.leaves()
-for k in [int(x) for x in sys.argv[1:]]:
-    chunks = [batch.map_chunk(job, s, e) for s, e in batch.chunk_ranges(n, k)]
-    plain = chunks[0].tree.copy()
-    for c in chunks[1:]: plain.merge(c.tree)
-    merged = chunks[0]
-    for c in chunks[1:]: merged = batch.merge_in_order(merged, c)
-    for name, t in (("plain merge", plain), ("in-order merge", merged.tree)):
-        b = t.query(points); lb = t.query(L.centers)
-        print(f"chunks of {k} ({len(chunks)} chunks), {name}: query labels differ {(a.labels != b.labels).sum()} of {len(points)}, "
-              f"max |belief diff| {np.abs(a.belief - b.belief).max():.2e}, known differ {(a.known != b.known).sum()}, "
-              f"occupied differ {(a.occupied != b.occupied).sum()} queries; leaves {t.num_leaves} vs {seq.num_leaves}, "
-              f"leaf labels differ {(L.labels != lb.labels).sum()}, leaf occupancy differs {(np.abs(L.occupancy - t.leaves().occupancy) > 0).sum() if t.num_leaves == seq.num_leaves else 'n/a'}, "
-              f"leaf occupied status differs {(lb.occupied != (L.occupancy > 0.5)).sum()} of {len(L.labels)}")
+SCANS = 10
+
+
+def merged(job, chunk, in_order):
+    chunks = [batch.map_chunk(job, s, e) for s, e in batch.chunk_ranges(SCANS, chunk)]
+
+    def plain(earlier, later):
+        earlier.tree.merge(later.tree)
+        return earlier
+
+    # The merge tree of map_sequence.
+    result = batch.reduce_in_pairs(chunks, batch.merge_in_order if in_order else plain)
+    if job.unclamped:
+        batch.clamp_as_octomap(result.tree)
+    return result.tree
+
+
+def compare(name, reference, tree, points):
+    a, b = reference.query(points), tree.query(points)
+    ref, got = reference.leaves(), tree.query(reference.leaves().centers)
+    same_leaves = tree.num_leaves == reference.num_leaves
+    occupancy = (f"{(np.abs(ref.occupancy - tree.leaves().occupancy) > 1e-6).sum():,}"
+                 if same_leaves else "-")
+    print(f"| {name} | {(a.labels != b.labels).sum():,} | {np.abs(a.belief - b.belief).max():.1e} | "
+          f"{tree.num_leaves:,} | {(ref.labels != got.labels).sum():,} | {occupancy} | "
+          f"{(got.occupied != (ref.occupancy > 0.5)).sum():,} |")
+
+
+def main():
+    classes = str(REPO / "config" / "classes_semantickitti.yaml")
+    job = batch.MappingJob(data=str(REPO / "data" / "semantickitti_08_first10"), classes=classes)
+    unclamped = dataclasses.replace(job, unclamped=True)
+    dataset = eo.Dataset.open(job.data, eo.ClassTable.load(classes))
+    points = np.concatenate([dataset.load(i).points_world() for i in range(SCANS)])
+    sequential = batch.map_chunk(job, 0, SCANS).tree
+    end_clamped = batch.map_chunk(unclamped, 0, SCANS).tree
+    batch.clamp_as_octomap(end_clamped)
+    print(f"{len(points):,} query points; sequential map {sequential.num_leaves:,} leaves")
+    print("| chunks, merge (reference) | labels differ | max belief diff | leaves | leaf labels "
+          "differ | leaf log-odds differ | leaf occupied state differs |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for chunk in [int(k) for k in sys.argv[1:]] or [5]:
+        n = -(-SCANS // chunk)
+        compare(f"{n} x {chunk}, plain (sequential)", sequential, merged(job, chunk, False), points)
+        compare(f"{n} x {chunk}, in order (sequential)", sequential, merged(job, chunk, True), points)
+        in_order_unclamped = merged(unclamped, chunk, True)
+        compare(f"{n} x {chunk}, in order, unclamped (sequential)", sequential, in_order_unclamped,
+                points)
+        compare(f"{n} x {chunk}, in order, unclamped (sequential clamped at the end)", end_clamped,
+                in_order_unclamped, points)
+
+
+if __name__ == "__main__":
+    main()

@@ -426,6 +426,22 @@ void EvidentialOcTree::addEvidence(const EvidentialOcTree& evidence, EvidentialO
   if (rest) rest->updateInnerNodes();
 }
 
+void EvidentialOcTree::setClampingThresLog(float min_log_odds, float max_log_odds) {
+  if (!(min_log_odds <= 0.0f && max_log_odds >= 0.0f) || !std::isfinite(min_log_odds) ||
+      !std::isfinite(max_log_odds)) {
+    throw std::invalid_argument("clamping bounds must be finite log-odds with min <= 0 <= max");
+  }
+  clamping_thres_min = min_log_odds;
+  clamping_thres_max = max_log_odds;
+}
+
+void EvidentialOcTree::clampOccupancy() {
+  for (auto it = begin_leafs(); it != end_leafs(); ++it) {
+    it->setLogOdds(clampLogOdds(it->getLogOdds(), clamping_thres_min, clamping_thres_max));
+  }
+  updateInnerNodes();
+}
+
 void EvidentialOcTree::merge(const EvidentialOcTree& other) {
   checkCompatible(other, "merge");
   if (!other.root) return;
