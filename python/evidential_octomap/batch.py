@@ -15,6 +15,7 @@ depends on the number of chunks only, never on the number of workers.
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import sys
 import time
@@ -173,8 +174,10 @@ def local_client(workers: Optional[int]):
     cores = os.cpu_count() or 1
     workers = workers or cores
     threads = str(max(1, cores // workers))
+    # Task errors reach the caller as exceptions; the workers' own logs would only add shutdown
+    # noise (heartbeats racing the scheduler's close).
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                           dashboard_address=":0",
+                           dashboard_address=":0", silence_logs=logging.CRITICAL,
                            env={"OMP_NUM_THREADS": threads})
     return Client(cluster)
 
