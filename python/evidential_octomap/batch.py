@@ -69,24 +69,38 @@ def map_chunk(job: MappingJob, start: int, stop: int) -> ChunkMap:
     dataset = Dataset.open(job.data, classes)
     config = job.semantic_config()
     tree = EvidentialOcTree(job.resolution, classes, config)
-    if job.unclamped:
-        tree.set_clamping_thres_log(-FLT_MAX, FLT_MAX)
     unobserved = EvidentialOcTree(job.resolution, classes, config)
+    set_unbounded(tree, job.unclamped)
     for i in range(start, stop):
         scan = dataset.load(i)
         evidence = derive_evidence(scan, classes.num_classes, job.evidence, job.magnitude)
         tree.insert_scan(scan.points_world(), evidence, origin=scan.origin, unobserved=unobserved)
+    set_unbounded(tree, False)
     return ChunkMap(start, stop - 1, tree, unobserved)
 
 
-def merge_in_order(earlier: ChunkMap, later: ChunkMap) -> ChunkMap:
-    """The map of both chunks, as if their scans had been inserted one after the other."""
+def set_unbounded(tree: EvidentialOcTree, unbounded: bool) -> None:
+    """Unbounded occupancy log-odds (while mapping or merging unclamped chunk maps), else
+    OctoMap's default bounds, which a map must carry whenever it is stored or sent (the .ot
+    format checks them; the log-odds themselves stay as they are)."""
+    if unbounded:
+        tree.set_clamping_thres_log(-FLT_MAX, FLT_MAX)
+    else:
+        defaults = EvidentialOcTree(tree.resolution)
+        tree.set_clamping_thres_log(defaults.clamping_thres_min_log, defaults.clamping_thres_max_log)
+
+
+def merge_in_order(earlier: ChunkMap, later: ChunkMap, unclamped: bool = False) -> ChunkMap:
+    """The map of both chunks, as if their scans had been inserted one after the other
+    (occupancy log-odds added without clamping when `unclamped`)."""
     if earlier.last_scan + 1 != later.first_scan:
         raise ValueError(f"chunks must be neighbours: scans ..{earlier.last_scan} and "
                          f"{later.first_scan}..")
     rest = EvidentialOcTree(earlier.tree.resolution, earlier.tree.class_names, earlier.tree.config)
     earlier.tree.add_evidence(later.unobserved, rest)  # before the later chunk's observations
+    set_unbounded(earlier.tree, unclamped)
     earlier.tree.merge(later.tree)
+    set_unbounded(earlier.tree, False)
     earlier.unobserved.merge(rest)
     return ChunkMap(earlier.first_scan, later.last_scan, earlier.tree, earlier.unobserved)
 
@@ -144,7 +158,8 @@ def map_sequence(client, job: MappingJob, scans: Optional[int] = None, chunk_siz
     merges = []
 
     def submit_merge(earlier, later):
-        merges.append(client.submit(merge_in_order, earlier, later, retries=retries, pure=False))
+        merges.append(client.submit(merge_in_order, earlier, later, job.unclamped,
+                                    retries=retries, pure=False))
         return merges[-1]
 
     result = reduce_in_pairs(chunks, submit_merge)
@@ -154,16 +169,8 @@ def map_sequence(client, job: MappingJob, scans: Optional[int] = None, chunk_siz
         bar.update(merged=int(is_merge), mapped=int(not is_merge))
     tree = result.result().tree
     if job.unclamped:
-        clamp_as_octomap(tree)
+        tree.clamp_occupancy()  # once, at the end
     return tree
-
-
-def clamp_as_octomap(tree: EvidentialOcTree) -> None:
-    """Clamps an unclamped map's log-odds to OctoMap's default bounds."""
-    defaults = EvidentialOcTree(tree.resolution)
-    tree.clamping_thres_min = defaults.clamping_thres_min
-    tree.clamping_thres_max = defaults.clamping_thres_max
-    tree.clamp_occupancy()
 
 
 def local_client(workers: Optional[int]):

@@ -268,6 +268,8 @@ void bindTree(nb::module_& m) {
       .def_prop_rw("clamping_thres_max", &Tree::getClampingThresMax, &Tree::setClampingThresMax)
       .def_prop_rw("occupancy_thres", &Tree::getOccupancyThres,
                    nb::overload_cast<double>(&Tree::setOccupancyThres))
+      .def_prop_ro("clamping_thres_min_log", &Tree::getClampingThresMinLog)
+      .def_prop_ro("clamping_thres_max_log", &Tree::getClampingThresMaxLog)
       .def("set_clamping_thres_log", &Tree::setClampingThresLog, nb::arg("min_log_odds"),
            nb::arg("max_log_odds"),
            "Clamping bounds in log-odds; (-3.4e38, 3.4e38) keeps log-odds unbounded (chunk maps "

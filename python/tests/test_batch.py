@@ -84,7 +84,7 @@ def test_command_line_writes_the_merged_map(tmp_path):
     out = tmp_path / "batch" / "map.ot"
     run = subprocess.run([sys.executable, "-m", "evidential_octomap.batch", "--data", str(KITTI),
                           "--classes", CLASSES, "--out", str(out), "--scans", "2",
-                          "--chunk-size", "1", "--workers", "2"],
+                          "--chunk-size", "1", "--workers", "2", "--unclamped-merge"],
                          check=True, capture_output=True, text=True)
     assert "DERIVED" in run.stderr and "2/2 chunks mapped, 1/1 merged" in run.stderr
     written = eo.load(out)
@@ -100,13 +100,15 @@ def test_unclamped_chunks_keep_unbounded_log_odds_until_the_end():
     import dataclasses
 
     tree = batch.map_chunk(dataclasses.replace(JOB, unclamped=True), 0, 1).tree
-    assert tree.clamping_thres_max == 1.0 and tree.clamping_thres_min == 0.0
+    default = eo.EvidentialOcTree(0.2)
+    assert tree.clamping_thres_max == pytest.approx(default.clamping_thres_max)  # can be sent
+    batch.set_unbounded(tree, True)
     for _ in range(3):  # 8 copies of the scan: log-odds far beyond OctoMap's bounds
         tree.merge(tree.copy())
-    default = eo.EvidentialOcTree(0.2)
-    assert tree.leaves().occupancy.max() > default.clamping_thres_max
-    batch.clamp_as_octomap(tree)
-    assert tree.clamping_thres_max == pytest.approx(default.clamping_thres_max)
-    clamped = tree.leaves().occupancy
+    batch.set_unbounded(tree, False)
+    sent = eo.EvidentialOcTree.from_bytes(tree.to_bytes())  # how Dask moves chunk maps
+    assert sent.leaves().occupancy.max() > default.clamping_thres_max
+    sent.clamp_occupancy()
+    clamped = sent.leaves().occupancy
     assert clamped.max() == pytest.approx(default.clamping_thres_max)
     assert clamped.min() == pytest.approx(default.clamping_thres_min)

@@ -26,10 +26,13 @@ def merged(job, chunk, in_order):
         earlier.tree.merge(later.tree)
         return earlier
 
+    def in_order_merge(earlier, later):
+        return batch.merge_in_order(earlier, later, job.unclamped)
+
     # The merge tree of map_sequence.
-    result = batch.reduce_in_pairs(chunks, batch.merge_in_order if in_order else plain)
+    result = batch.reduce_in_pairs(chunks, in_order_merge if in_order else plain)
     if job.unclamped:
-        batch.clamp_as_octomap(result.tree)
+        result.tree.clamp_occupancy()
     return result.tree
 
 
@@ -52,7 +55,7 @@ def main():
     points = np.concatenate([dataset.load(i).points_world() for i in range(SCANS)])
     sequential = batch.map_chunk(job, 0, SCANS).tree
     end_clamped = batch.map_chunk(unclamped, 0, SCANS).tree
-    batch.clamp_as_octomap(end_clamped)
+    end_clamped.clamp_occupancy()
     print(f"{len(points):,} query points; sequential map {sequential.num_leaves:,} leaves")
     print("| chunks, merge (reference) | labels differ | max belief diff | leaves | leaf labels "
           "differ | leaf log-odds differ | leaf occupied state differs |")
