@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <limits>
 #include <memory>
 #include <random>
@@ -103,6 +104,8 @@ TEST(ParameterSpace, EverySensorModelTheTreeAcceptsIsSavedAndLoaded) {
             EXPECT_TRUE(savedAndLoadsBack(tree, path, what.str())) << what.str() << " refused";
           }
   std::remove(path.c_str());
+  std::cout << "[sensor models] " << accepted << " accepted (saved and loaded back), " << refused
+            << " refused\n";
   // Both sides of the property were exercised.
   EXPECT_GT(accepted, 100u);
   EXPECT_GT(refused, 1000u);
@@ -210,6 +213,9 @@ TEST(ParameterSpace, EverySemanticConfigTheTreeAcceptsIsSavedAndLoaded) {
     EXPECT_TRUE(savedAndLoadsBack(tree, path, what.str())) << what.str() << " refused";
   }
   std::remove(path.c_str());
+  std::cout << "[semantic configs] " << accepted << " accepted (saved and loaded back; " << inserted
+            << " took a scan, " << refused_scans << " scans refused for their kernel), " << refused
+            << " refused\n";
   EXPECT_GT(accepted, 200u);
   EXPECT_GT(inserted, 5u);
   EXPECT_GT(refused_scans, 5u);
