@@ -97,5 +97,32 @@ struct RefEvidenceSum {
   }
 };
 
+// The map's rule as defined (fusion_rule.h), in long double: L^c accumulates the log-factors of
+// each update; when sum L passes `bound` every L^c is scaled down to sum L = bound; the opinion
+// is read with L scaled to sum L <= cap (cap <= 0: no cap).
+struct RefBoundedEvidence {
+  std::vector<long double> log_factor;
+  long double bound, cap;
+  RefBoundedEvidence(int num_classes, long double bound, long double cap)
+      : log_factor(num_classes, 0.0L), bound(bound), cap(cap) {}
+  // One voxel update: the summed increments of a scan.
+  void add(const std::vector<long double>& increments) {
+    long double total = 0.0L;
+    for (size_t c = 0; c < log_factor.size(); ++c) total += log_factor[c] + increments[c];
+    const long double scale = total > bound ? bound / total : 1.0L;
+    for (size_t c = 0; c < log_factor.size(); ++c) {
+      log_factor[c] = (log_factor[c] + increments[c]) * scale;
+    }
+  }
+  RefOpinion opinion() const {
+    long double total = 0.0L;
+    for (long double l : log_factor) total += l;
+    RefEvidenceSum capped(static_cast<int>(log_factor.size()));
+    const long double scale = cap > 0.0L && total > cap ? cap / total : 1.0L;
+    for (size_t c = 0; c < log_factor.size(); ++c) capped.log_factor[c] = log_factor[c] * scale;
+    return capped.opinion();
+  }
+};
+
 }  // namespace test
 }  // namespace evidential_octomap

@@ -142,14 +142,17 @@ std::vector<float> reencodeNode(const std::string& in, size_t* at, int num_class
   return payload;
 }
 
-// The same map as format 2 wrote it (inner payloads, dense payloads), from a format-3 file.
+// The same map as format 2 wrote it (inner payloads, dense payloads, no evidence cap: the f64
+// before the node count), from a format-4 file.
 std::string toFormat2(const std::string& bytes, const EvidentialOcTree& tree) {
   const size_t s = sectionStart(bytes);
-  size_t at = rootOffset(bytes, tree.size());
+  const size_t root = rootOffset(bytes, tree.size());
+  size_t at = root;
   std::string nodes;
   reencodeNode(bytes, &at, tree.numClasses(), tree.rule().prior(), &nodes);
-  std::string old = bytes.substr(0, rootOffset(bytes, tree.size())) + nodes +
-                    bytes.substr(at, bytes.size() - at);  // end magic and CRC
+  std::string header = bytes.substr(0, root);
+  header.erase(root - 16, 8);
+  std::string old = header + nodes + bytes.substr(at, bytes.size() - at);  // end magic and CRC
   const uint32_t two = 2;
   std::memcpy(&old[s + kVersionOffset], &two, 4);
   reseal(&old);
@@ -244,6 +247,9 @@ TEST(Integrity, Format1And2FilesStillLoad) {
     tree->write(out);
     const std::string v2 = toFormat2(out.str(), *tree);
     ASSERT_GT(v2.size(), out.str().size()) << "format 2 stores inner payloads";
+    // Formats before 4 predate the evidence cap: their maps are read without one.
+    config.evidence_cap = 0.0;
+    tree->setConfig(config);
     for (const std::string& file : {v2, toFormat1(v2)}) {
       const std::string path = scratch.file("old_format.ot");
       writeBytes(path, file);

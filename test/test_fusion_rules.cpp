@@ -42,12 +42,19 @@ PointOpinion pointOpinion(const std::vector<float>& e) {
   return p;
 }
 
-// Applies one point to a payload the way the map does: increments first, then add.
+// Applies one point to a payload the way the map does: increments first, then the rule's add.
 void fuse(const FusionRule& rule, const std::vector<float>& e, double k, float* payload) {
   const int num_classes = static_cast<int>(e.size());
   std::vector<double> increments(num_classes, 0.0);
   rule.contribute(pointOpinion(e), k, num_classes, increments.data());
-  for (int c = 0; c < num_classes; ++c) payload[c] += static_cast<float>(increments[c]);
+  rule.add(payload, increments.data(), num_classes);
+}
+
+// Dempster's rule read without the evidence cap: what the belief-space cross-checks compare.
+SemanticConfig uncappedDempster() {
+  SemanticConfig config;
+  config.evidence_cap = 0.0;
+  return config;
 }
 
 // Extended belief of a point at kernel value k, in the library's belief-space type.
@@ -259,7 +266,7 @@ TEST(DempsterRule, ReadoutOfHugePayloadDoesNotOverflow) {
 TEST(DempsterRule, MapPayloadAgreesWithBeliefSpaceInBothOrders) {
   for (int num_classes : {2, 7, 20}) {
     RandomMasses rnd(200 + num_classes);
-    EvidentialOcTree tree(0.2, num_classes);
+    EvidentialOcTree tree(0.2, num_classes, uncappedDempster());
     const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(1.0f, 2.0f, 0.5f));
     EvidentialOcTreeNode* node = tree.leafForUpdate(key, true);
     ASSERT_NE(node, nullptr);
@@ -300,7 +307,7 @@ TEST(DempsterRule, MapPayloadAgreesWithBeliefSpaceInBothOrders) {
 TEST(DempsterRule, IntegratedScansAgreeWithBeliefSpaceInBothOrders) {
   const int num_classes = 4;
   RandomMasses rnd(300);
-  SemanticConfig config;
+  SemanticConfig config = uncappedDempster();
   config.uncertainty_threshold = false;  // one point per scan: nothing to drop
   config.ds_multiplier = 0.0;            // keep the point exactly where it is
   config.kernel_creates_leaves = true;   // the voxel above is unknown space
@@ -388,55 +395,125 @@ NaiveFloatOpinion naiveCombine(const NaiveFloatOpinion& m1, const std::vector<fl
   return out;
 }
 
-TEST(DempsterRule, MillionFusionsIntoOneVoxelStayFiniteAndCorrect) {
+// --- float absorption (issue 16 item 8): the map's float payload against the rule in long double
+
+// One voxel updated the way the map updates it (rule.add of a scan's increments), beside the
+// long-double reference of the same rule (bounded storage, capped read-out).
+struct BoundedVoxel {
+  std::unique_ptr<FusionRule> rule;
+  std::vector<float> payload;
+  test::RefBoundedEvidence reference;
+  BoundedVoxel(int num_classes, double cap)
+      : rule(FusionRule::create(FusionRuleType::kDempster, 0.001f, cap)),
+        payload(num_classes, 0.0f),
+        reference(num_classes, kMaxStoredLogEvidence, cap) {}
+  void add(const std::vector<double>& increments) {
+    rule->add(payload.data(), increments.data(), static_cast<int>(payload.size()));
+    reference.add(std::vector<long double>(increments.begin(), increments.end()));
+  }
+  VoxelOpinion opinion() const { return rule->readout(payload.data(), int(payload.size())); }
+};
+
+TEST(FloatAbsorption, TieBrokenBySmallIncrementsAtTheBound) {
+  // Both classes fill the voxel to the bound (L = 512 each), then 1000 scans add 0.005 to class
+  // 1 only. Unbounded floats at L ~ 2^18 lost every one of them (label 0 at b = 0.5 / 0.5); the
+  // rule as defined ends at L1 - L0 ~ 4.99, b1 ~ 0.9932 uncapped.
+  for (double cap : {0.0, 3.0}) {
+    BoundedVoxel voxel(2, cap);
+    for (int i = 0; i < 20000; ++i) voxel.add({1.0, 1.0});
+    for (int i = 0; i < 1000; ++i) voxel.add({0.0, 0.005});
+    const RefOpinion expected = voxel.reference.opinion();
+    const VoxelOpinion got = voxel.opinion();
+    ASSERT_EQ(argmaxOf(expected), 1);
+    EXPECT_EQ(got.label, 1) << "cap " << cap;
+    EXPECT_LE(maxDiff(got, expected), 2e-4) << "cap " << cap;
+    if (cap == 0.0) {
+      EXPECT_NEAR(got.belief[1], 0.9932, 1e-3);
+    }
+  }
+}
+
+TEST(FloatAbsorption, DominantClassIsOvertakenWhenTheReferenceIsOvertaken) {
+  // Class 0 saturates the voxel; then scans favouring class 1 arrive. The label must flip at the
+  // very scan the long-double rule flips, and the beliefs follow it throughout.
+  for (double cap : {0.0, 3.0}) {
+    BoundedVoxel voxel(3, cap);
+    for (int i = 0; i < 5000; ++i) voxel.add({2.0, 0.01, 0.0});
+    int flipped_at = -1, reference_flipped_at = -1;
+    double worst = 0.0;
+    for (int i = 0; i < 2000; ++i) {
+      voxel.add({0.05, 1.0, 0.0});
+      const VoxelOpinion got = voxel.opinion();
+      const RefOpinion expected = voxel.reference.opinion();
+      if (flipped_at < 0 && got.label == 1) flipped_at = i;
+      if (reference_flipped_at < 0 && argmaxOf(expected) == 1) reference_flipped_at = i;
+      worst = std::max(worst, maxDiff(got, expected));
+    }
+    ASSERT_GE(reference_flipped_at, 0);
+    EXPECT_EQ(flipped_at, reference_flipped_at) << "cap " << cap;
+    EXPECT_LE(worst, 2e-4) << "cap " << cap;
+  }
+}
+
+TEST(FloatAbsorption, MillionFusionsIntoOneVoxelFollowTheRule) {
+  // 10^6 point contributions (k in [0.5, 1]) into one map voxel, read through the tree; class 2
+  // dominates noisily. Checked against the long-double rule at every power of ten.
   const int num_classes = 4;
   const int kFusions = 1000000;
   const int kTrue = 2;
   RandomMasses rnd(400);
-  EvidentialOcTree tree(0.2, num_classes);
+  EvidentialOcTree tree(0.2, num_classes);  // the default read-out cap
   const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(0.0f, 0.0f, 0.0f));
   float* payload = tree.payloadForUpdate(tree.leafForUpdate(key, true));
-  ASSERT_NE(payload, nullptr);
-
-  test::RefEvidenceSum reference(num_classes);
-  NaiveFloatOpinion naive;
-  naive.belief.assign(num_classes, 0.0f);
-  float previous_u = 1.0f;
+  test::RefBoundedEvidence reference(num_classes, kMaxStoredLogEvidence, tree.config().evidence_cap);
+  const auto uncapped = FusionRule::create(FusionRuleType::kDempster);
   int next_check = 1;
   for (int n = 1; n <= kFusions; ++n) {
     std::vector<float> e(num_classes);
     for (float& x : e) x = static_cast<float>(rnd.uniform(0.0, 1.0));
-    e[kTrue] += static_cast<float>(rnd.uniform(1.0, 3.0));  // class 2 dominates, noisily
+    e[kTrue] += static_cast<float>(rnd.uniform(1.0, 3.0));
     const double k = rnd.uniform(0.5, 1.0);
-    fuse(tree.rule(), e, k, payload);
-    reference.add(test::refExtend(test::refFromEvidence(e), k));
-    naive = naiveCombine(naive, e);
-
-    const VoxelOpinion v = tree.rule().readout(payload, num_classes);
-    ASSERT_LE(v.uncertainty, previous_u) << "u grew at fusion " << n;
-    previous_u = v.uncertainty;
+    std::vector<double> increments(num_classes, 0.0);
+    tree.rule().contribute(pointOpinion(e), k, num_classes, increments.data());
+    tree.rule().add(payload, increments.data(), num_classes);
+    reference.add(std::vector<long double>(increments.begin(), increments.end()));
     if (n == next_check || n == kFusions) {
       next_check *= 10;
-      ASSERT_TRUE(std::isfinite(v.uncertainty)) << n;
+      const VoxelOpinion v = tree.query(key);
       double sum = v.uncertainty;
-      for (float b : v.belief) {
-        ASSERT_TRUE(std::isfinite(b)) << n;
-        ASSERT_GE(b, 0.0f) << n;
-        sum += b;
-      }
+      for (float b : v.belief) sum += b;
       EXPECT_NEAR(sum, 1.0, 1e-6) << "after " << n << " fusions";
-      const RefOpinion expected = reference.opinion();
-      EXPECT_LE(maxDiff(v, expected), 1e-6) << "after " << n << " fusions";
+      EXPECT_LE(maxDiff(v, reference.opinion()), 1e-5) << "after " << n << " fusions";
       if (n >= 10) {
         EXPECT_EQ(v.label, kTrue) << "after " << n << " fusions";
       }
+      double stored = 0.0;
+      for (int c = 0; c < num_classes; ++c) stored += payload[c];
+      EXPECT_LE(stored, kMaxStoredLogEvidence * (1 + 1e-6));
     }
   }
-  // Read through the tree as a user would.
-  const VoxelOpinion final_voxel = tree.query(key);
-  EXPECT_EQ(final_voxel.label, kTrue);
-  EXPECT_NEAR(final_voxel.belief[kTrue], 1.0, 1e-6);
-  for (int c = 0; c < num_classes; ++c) EXPECT_TRUE(std::isfinite(payload[c]));
+  // Read without the cap, the saturated voxel is as certain as floats can say: u ~ e^-1024 = 0.
+  const VoxelOpinion raw = uncapped->readout(payload, num_classes);
+  EXPECT_EQ(raw.label, kTrue);
+  EXPECT_NEAR(raw.belief[kTrue], 1.0, 1e-6);
+}
+
+TEST(EvidenceCap, ReadsTheOpinionOfTheCappedLogEvidence) {
+  // L = (6, 3, 0), cap 3: read as L = (2, 1, 0): u = 1 / (e^2 + e + 1 - 3 + 1),
+  // b = (e^2 - 1, e - 1, 0) u. The label and the conflict are those of the uncapped payload.
+  const auto capped = FusionRule::create(FusionRuleType::kDempster, 0.001f, 3.0);
+  const auto raw = FusionRule::create(FusionRuleType::kDempster);
+  const float payload[3] = {6.0f, 3.0f, 0.0f};
+  const VoxelOpinion v = capped->readout(payload, 3);
+  const double e = std::exp(1.0), u = 1.0 / (e * e + e - 1);
+  EXPECT_EQ(v.label, 0);
+  EXPECT_NEAR(v.uncertainty, u, 1e-6);
+  EXPECT_NEAR(v.belief[0], (e * e - 1) * u, 1e-6);
+  EXPECT_NEAR(v.belief[1], (e - 1) * u, 1e-6);
+  EXPECT_EQ(v.conflict, raw->readout(payload, 3).conflict);
+  // Below the cap nothing changes.
+  const float small[3] = {1.0f, 0.5f, 0.0f};
+  EXPECT_EQ(capped->readout(small, 3).belief, raw->readout(small, 3).belief);
 }
 
 TEST(DempsterRule, NaiveFloatBeliefRuleFailsWhereEvidenceSpaceDoesNot) {

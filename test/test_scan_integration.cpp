@@ -191,8 +191,11 @@ TEST(ScanIntegration, SceneInTheNegativeOctantIsMappedAlike) {
 }
 
 TEST_F(SyntheticSceneTest, UncertaintyFallsWithRepeatedConsistentScans) {
+  // Dempster's rule itself (no evidence cap on the read-out): every consistent scan lowers u.
   const auto truth = groundTruthVoxels(key_helper, scan, scene.num_classes);
-  EvidentialOcTree once(0.2, scene.num_classes), five(0.2, scene.num_classes);
+  SemanticConfig uncapped;
+  uncapped.evidence_cap = 0.0;
+  EvidentialOcTree once(0.2, scene.num_classes, uncapped), five(0.2, scene.num_classes, uncapped);
   once.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
   for (int i = 0; i < 5; ++i) five.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
   size_t strictly_lower = 0, comparable = 0;

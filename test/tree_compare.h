@@ -90,7 +90,7 @@ inline ::testing::AssertionResult compareTrees(const EvidentialOcTree& a,
       !sameBits(ca.beta, cb.beta) || !sameBits(ca.gamma, cb.gamma) ||
       !sameBits(ca.drop_percent, cb.drop_percent) ||
       !sameBits(ca.ds_multiplier, cb.ds_multiplier) || !sameBits(ca.max_range, cb.max_range) ||
-      !sameBits(ca.sbki_prior, cb.sbki_prior)) {
+      !sameBits(ca.sbki_prior, cb.sbki_prior) || !sameBits(ca.evidence_cap, cb.evidence_cap)) {
     return fail("a numeric SemanticConfig parameter differs");
   }
   if (ca.adaptive_length != cb.adaptive_length ||

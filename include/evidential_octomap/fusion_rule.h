@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "evidential_octomap/semantic_config.h"
+
 namespace evidential_octomap {
 
 enum class FusionRuleType { kDempster = 0, kSbki = 1, kEbs = 2 };
@@ -56,14 +58,31 @@ class FusionRule {
   // Adds the contribution of `point`, weighted by kernel value k in [0, 1], to `increments` (C).
   virtual void contribute(const PointOpinion& point, double k, int num_classes,
                           double* increments) const = 0;
+  // Adds a row of increments (or another map's payload minus the prior) to a stored payload,
+  // rounding once, and keeps it within what a float stores faithfully (dempster: sum L <=
+  // kMaxStoredLogEvidence, scaled down in proportion beyond it).
+  virtual void add(float* payload, const double* increments, int num_classes) const;
   // Interprets a payload of C floats.
   virtual VoxelOpinion readout(const float* payload, int num_classes) const = 0;
 
-  static std::unique_ptr<FusionRule> create(FusionRuleType type, float sbki_prior = 0.001f);
+  // The rule of a map's settings (rule, sbki_prior, evidence_cap).
+  static std::unique_ptr<FusionRule> create(const SemanticConfig& config);
+  static std::unique_ptr<FusionRule> create(FusionRuleType type, float sbki_prior = 0.001f,
+                                            double evidence_cap = 0.0);
   // Throws std::invalid_argument naming the valid rules when `name` is unknown.
   static std::unique_ptr<FusionRule> create(const std::string& name, float sbki_prior = 0.001f);
 };
 
 FusionRuleType fusionRuleFromName(const std::string& name);
+
+// Bound of the dempster payload, sum_c L^c (issue 16 item 8). A float holding L < 1024 keeps
+// increments down to 2^-15 (3e-5); without a bound L passes 2^18 after ~10^4 scans of one voxel
+// and whole scans of evidence vanish in rounding. At the bound the map forgets old evidence in
+// proportion, like OctoMap's clamping: from there on the result depends on the order of the
+// scans, and merged chunk maps equal the sequential map only while no voxel has reached it
+// (tens of scans of one voxel; none on the bundled 10-scan sequence, where the bound changes no
+// metric). The read-out cap (SemanticConfig::evidence_cap) only sees proportions, which the
+// bound keeps.
+inline constexpr double kMaxStoredLogEvidence = 1024.0;
 
 }  // namespace evidential_octomap

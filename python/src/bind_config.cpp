@@ -38,14 +38,17 @@ void bindConfig(nb::module_& m) {
       .def_rw("adaptive_length", &SemanticConfig::adaptive_length)
       .def_rw("uncertainty_threshold", &SemanticConfig::uncertainty_threshold)
       .def_rw("reference_compat", &SemanticConfig::reference_compat,
-              "gamma = 0, as the authors' released code.")
+              "The authors' released configuration: gamma = 0 and count-cap down-sampling.")
       .def_rw("sbki_prior", &SemanticConfig::sbki_prior)
+      .def_rw("evidence_cap", &SemanticConfig::evidence_cap,
+              "dempster: opinions are read with the log-evidence capped at this (0: no cap).")
       .def_rw("downsampling", &SemanticConfig::downsampling,
               "'average' (per cell of resolution / ds_multiplier) or 'count_cap' (the authors').")
       .def_rw("kernel_distance", &SemanticConfig::kernel_distance,
               "'voxel' (distance to the voxel's cube) or 'centre'.")
       .def_rw("ds_multiplier", &SemanticConfig::ds_multiplier,
-              "Semantic down-sampling grid = resolution / ds_multiplier (<= 0: off).")
+              "Down-sampling parameter (<= 0: off): average grid resolution / ds_multiplier, "
+              "or count cap ds_multiplier + 1 points per 2 x 2 x 2 voxels.")
       .def_rw("max_range", &SemanticConfig::max_range, "Max sensor range [m]; < 0: unlimited.")
       .def_rw("kernel_creates_leaves", &SemanticConfig::kernel_creates_leaves,
               "Let kernel updates create leaves in unknown space.")

@@ -57,7 +57,7 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
       num_classes_(rhs.num_classes_),
       class_names_(rhs.class_names_),
       config_(rhs.config_),
-      rule_(FusionRule::create(rhs.config_.rule, rhs.config_.sbki_prior)),
+      rule_(FusionRule::create(rhs.config_)),
       pool_(std::make_unique<PayloadPool>(rhs.num_classes_)) {
   // OctoMap's own copy constructor slices derived nodes, so the nodes are copied here.
   clamping_thres_min = rhs.clamping_thres_min;
@@ -100,7 +100,7 @@ void EvidentialOcTree::setClassNames(const std::vector<std::string>& names) {
 void EvidentialOcTree::setConfig(const SemanticConfig& config) {
   const std::string problem = config.problem();
   if (!problem.empty()) throw std::invalid_argument("semantic config: " + problem);
-  auto rule = FusionRule::create(config.rule, config.sbki_prior);
+  auto rule = FusionRule::create(config);
   const bool meaning_changes =
       config.rule != config_.rule || config.sbki_prior != config_.sbki_prior;
   if (rule_ && meaning_changes && numSemanticNodes() > 0) {
@@ -392,11 +392,9 @@ void EvidentialOcTree::checkCompatible(const EvidentialOcTree& other, const char
 }
 
 void EvidentialOcTree::addPayload(float* into, const float* from) const {
-  const float prior = rule_->prior();
-  for (int c = 0; c < num_classes_; ++c) {
-    into[c] = static_cast<float>(
-        std::min(double(into[c]) + from[c] - prior, double(std::numeric_limits<float>::max())));
-  }
+  std::vector<double> increments(from, from + num_classes_);
+  for (double& v : increments) v -= rule_->prior();
+  rule_->add(into, increments.data(), num_classes_);  // saturating, bounded like a scan's update
 }
 
 void EvidentialOcTree::addEvidence(const EvidentialOcTree& evidence, EvidentialOcTree* rest) {

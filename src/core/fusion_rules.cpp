@@ -1,6 +1,7 @@
 // The three fusion rules behind FusionRule (see fusion_rule.h for what each payload holds).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -24,6 +25,7 @@ int argmaxAbove(const float* values, int num_classes, float floor) {
 // Evidence-space Dempster (DESIGN §1, "the stable form"): L^c = sum log1p(e_hat^c / C).
 class DempsterRule : public FusionRule {
  public:
+  explicit DempsterRule(double evidence_cap) : cap_(evidence_cap) {}
   FusionRuleType type() const override { return FusionRuleType::kDempster; }
   float prior() const override { return 0.0f; }  // vacuous
   bool usesUncertaintyKernel() const override { return true; }
@@ -43,29 +45,56 @@ class DempsterRule : public FusionRule {
     }
   }
 
+  void add(float* payload, const double* increments, int num_classes) const override {
+    double total = 0.0;
+    for (int c = 0; c < num_classes; ++c) total += double(payload[c]) + increments[c];
+    const double scale = total > kMaxStoredLogEvidence ? kMaxStoredLogEvidence / total : 1.0;
+    for (int c = 0; c < num_classes; ++c) {
+      payload[c] = static_cast<float>((double(payload[c]) + increments[c]) * scale);
+    }
+  }
+
   VoxelOpinion readout(const float* payload, int num_classes) const override {
     VoxelOpinion out;
     out.belief.assign(num_classes, 0.0f);
-    const float m = *std::max_element(payload, payload + num_classes);
-    if (!(m > 0.0f)) return out;  // vacuous: u = 1, no label
-    // u = 1 / (sum e^L - C + 1), b = (e^L - 1) u, scaled by e^-m. Every term below is >= 0,
-    // so nothing cancels: e^(L-m) - e^-m = e^(L-m) * -expm1(-L).
-    const double scale = std::exp(-double(m));
-    double denominator = scale;
+    double total = 0.0, m = 0.0;
     for (int c = 0; c < num_classes; ++c) {
-      const double mass = std::exp(double(payload[c]) - m) * -std::expm1(-double(payload[c]));
-      out.belief[c] = static_cast<float>(mass);  // divided below
-      denominator += mass;
+      total += payload[c];
+      m = std::max(m, double(payload[c]));
     }
-    for (int c = 0; c < num_classes; ++c) out.belief[c] = float(out.belief[c] / denominator);
-    out.uncertainty = static_cast<float>(scale / denominator);
+    if (!(m > 0.0)) return out;  // vacuous: u = 1, no label
     out.label = argmaxAbove(payload, num_classes, 0.0f);
-    // -ln u = m + ln(denominator): the log-evidence the fused opinion kept.
-    const double total = std::accumulate(payload, payload + num_classes, 0.0);
-    out.conflict =
-        static_cast<float>(std::clamp(1.0 - (m + std::log(denominator)) / total, 0.0, 1.0));
+    // The opinion of the log-evidence capped at cap_ (scaled in proportion); the conflict of
+    // the evidence actually fused.
+    const double scale = cap_ > 0.0 && total > cap_ ? cap_ / total : 1.0;
+    const double kept = read(payload, num_classes, scale, m * scale, &out);
+    const double kept_uncapped = scale == 1.0 ? kept : read(payload, num_classes, 1.0, m, nullptr);
+    out.conflict = static_cast<float>(std::clamp(1.0 - kept_uncapped / total, 0.0, 1.0));
     return out;
   }
+
+ private:
+  // u = 1 / (sum e^L - C + 1), b = (e^L - 1) u for L = scale * payload (into `out` when given),
+  // evaluated with the largest L (m) subtracted. Every term is >= 0, so nothing cancels:
+  // e^(L-m) - e^-m = e^(L-m) * -expm1(-L). Returns -ln u: the log-evidence the opinion kept.
+  static double read(const float* payload, int num_classes, double scale, double m,
+                     VoxelOpinion* out) {
+    const double floor = std::exp(-m);
+    double denominator = floor;
+    for (int c = 0; c < num_classes; ++c) {
+      const double l = scale * payload[c];
+      const double mass = std::exp(l - m) * -std::expm1(-l);
+      if (out) out->belief[c] = static_cast<float>(mass);  // divided below
+      denominator += mass;
+    }
+    if (out) {
+      for (int c = 0; c < num_classes; ++c) out->belief[c] = float(out->belief[c] / denominator);
+      out->uncertainty = static_cast<float>(floor / denominator);
+    }
+    return m + std::log(denominator);
+  }
+
+  double cap_;
 };
 
 // Dirichlet-count rules (S-BKI and evidential BKI) share their read-out.
@@ -133,10 +162,22 @@ FusionRuleType fusionRuleFromName(const std::string& name) {
   throw std::invalid_argument("unknown fusion rule '" + name + "' (valid: " + valid + ")");
 }
 
-std::unique_ptr<FusionRule> FusionRule::create(FusionRuleType type, float sbki_prior) {
+void FusionRule::add(float* payload, const double* increments, int num_classes) const {
+  for (int c = 0; c < num_classes; ++c) {
+    payload[c] = static_cast<float>(
+        std::min(double(payload[c]) + increments[c], double(std::numeric_limits<float>::max())));
+  }
+}
+
+std::unique_ptr<FusionRule> FusionRule::create(const SemanticConfig& config) {
+  return create(fusionRuleFromName(config.rule), config.sbki_prior, config.evidence_cap);
+}
+
+std::unique_ptr<FusionRule> FusionRule::create(FusionRuleType type, float sbki_prior,
+                                               double evidence_cap) {
   switch (type) {
     case FusionRuleType::kDempster:
-      return std::make_unique<DempsterRule>();
+      return std::make_unique<DempsterRule>(evidence_cap);
     case FusionRuleType::kSbki:
       return std::make_unique<SbkiRule>(sbki_prior);
     case FusionRuleType::kEbs:

@@ -1,13 +1,14 @@
 // The data section of an EvidentialOcTree .ot file (what AbstractOcTree::write puts after OctoMap's
-// text header "id / size / res / data"). Little-endian, format 3:
+// text header "id / size / res / data"). Little-endian, format 4:
 //
 //   u32 magic "EVEM", u32 format, f64 resolution (2+), u32 C, C x string class name,
 //   string rule, string downsampling (2+), string kernel_distance (2+), 7 x f64 (length_scale
 //   sigma0 beta gamma drop_percent ds_multiplier max_range), 5 x u8 flags, f32 sbki_prior,
-//   5 x f32 occupancy log-odds (clamp min, clamp max, hit, miss, threshold), u64 node count,
+//   5 x f32 occupancy log-odds (clamp min, clamp max, hit, miss, threshold), f64 evidence_cap
+//   (4+; older maps are read without a cap, as they were written), u64 node count,
 //   nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of every byte from the magic to
 //   the end magic.
-//   node (3): f32 log-odds, u8 child mask, and for a leaf a u8 payload tag:
+//   node (3+): f32 log-odds, u8 child mask, and for a leaf a u8 payload tag:
 //             0 no payload; 1 C x f32; 2 + n: n x (u8 class, f32 value), the classes whose value
 //             differs (in its bits) from the rule's prior, in increasing order. The writer takes
 //             the shorter form. Inner nodes store no payload: their summary (the richest
@@ -15,7 +16,7 @@
 //   node (1, 2): f32 log-odds, u8 child mask, u8 has-payload, [C x f32 payload], inner nodes too
 //   string: u32 length (<= 4096), bytes
 //
-// Format 1 (before the CRC) has no resolution field and no CRC; formats 1 and 2 are still read.
+// Format 1 (before the CRC) has no resolution field and no CRC; formats 1 to 3 are still read.
 // OctoMap's own header prints `res` with the stream's precision (6 digits unless the writer sets
 // more), so formats 2+ keep the exact resolution in the section and the reader restores it.
 #include <algorithm>
@@ -38,7 +39,8 @@ constexpr uint32_t kFileMagic = 0x4D455645u;  // "EVEM"
 constexpr uint32_t kFileEndMagic = 0x444E4545u;
 constexpr uint32_t kFormatWithoutCrc = 1;
 constexpr uint32_t kFormatWithInnerPayloads = 2;
-constexpr uint32_t kFormat = 3;
+constexpr uint32_t kFormatSparseNodes = 3;  // no inner payloads, sparse leaf payloads
+constexpr uint32_t kFormat = 4;
 constexpr uint32_t kMaxNameLength = 4096;
 constexpr uint8_t kNoPayloadTag = 0;
 constexpr uint8_t kDenseTag = 1;
@@ -195,6 +197,7 @@ void EvidentialOcTree::writeHeader(SectionWriter& out) const {
                   occ_prob_thres_log}) {  // the order storedParameterProblem() reads
     out.pod(v);
   }
+  out.pod(config_.evidence_cap);
 }
 
 // Depth first, child 0 first. Returns false (and stops) at the first inner node whose occupancy
@@ -254,7 +257,7 @@ std::istream& EvidentialOcTree::readData(std::istream& s) {
     const uint32_t version = in.pod<uint32_t>("semantic header");
     if (version < kFormatWithoutCrc || version > kFormat) {
       throw FormatError("unsupported EvidentialOcTree file format " + std::to_string(version) +
-                        " (this library reads formats 1 to 3)");
+                        " (this library reads formats 1 to 4)");
     }
     readHeader(in, version);
     const uint64_t expected_nodes = in.pod<uint64_t>("node count");
@@ -329,6 +332,7 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
   config.sbki_prior = in.pod<float>("parameters");
   float occupancy[5];
   for (float& v : occupancy) v = in.pod<float>("occupancy parameters");
+  config.evidence_cap = version > kFormatSparseNodes ? in.pod<double>("evidence cap") : 0.0;
   const std::string problem = storedParameterProblem(resolution, occupancy, config);
   if (!problem.empty()) throw FormatError("bad parameters: " + problem);
   setConfig(config);
@@ -350,7 +354,7 @@ void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned dept
   }
   node->setValue(value);
   std::vector<float> summary;  // formats 1 and 2: the stored summary of an inner node
-  if (version < kFormat) {
+  if (version < kFormatSparseNodes) {
     const uint8_t has_payload = in.pod<uint8_t>("node data");
     if (has_payload > 1) throw FormatError("bad payload flag (corrupt node data)");
     if (has_payload && children != 0) {
@@ -371,7 +375,7 @@ void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned dept
   const std::string problem = innerNodeProblem(node);
   if (!problem.empty()) throw FormatError(problem + " (corrupt node data)");
   linkSummary(node);
-  if (version < kFormat) {  // the stored summary must be the one derived from the children
+  if (version < kFormatSparseNodes) {  // the stored summary must be the one derived from the children
     const float* derived = payload(node);
     if ((derived == nullptr) != summary.empty() ||
         (derived && !std::equal(summary.begin(), summary.end(), derived, sameBits))) {

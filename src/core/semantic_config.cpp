@@ -39,6 +39,8 @@ std::string SemanticConfig::problem() const {
     return outOfRange("drop_percent", drop_percent, "in [0, 100)");
   if (!(std::isfinite(sbki_prior) && sbki_prior > 0.0f))
     return outOfRange("sbki_prior", sbki_prior, "finite and > 0");
+  if (!(std::isfinite(evidence_cap) && evidence_cap >= 0.0))
+    return outOfRange("evidence_cap", evidence_cap, "finite and >= 0 (0: no cap)");
   if (downsampling != "average" && downsampling != "count_cap")
     return "downsampling '" + downsampling + "' is unknown; use average or count_cap";
   if (kernel_distance != "voxel" && kernel_distance != "centre")
@@ -82,6 +84,7 @@ void SemanticConfig::print(std::ostream& out) const {
       << "uncertainty_threshold: " << (uncertainty_threshold ? "true" : "false") << "\n"
       << "reference_compat: " << (reference_compat ? "true" : "false") << "\n"
       << "sbki_prior: " << sbki_prior << "\n"
+      << "evidence_cap: " << evidence_cap << "\n"
       << "downsampling: " << downsampling
       << (effectiveDownsampling() != downsampling ? " (count_cap used)" : "") << "\n"
       << "ds_multiplier: " << ds_multiplier << "\n"

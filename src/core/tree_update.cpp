@@ -162,9 +162,8 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
       updateNodeLogOdds(node, begin->occupancy > 0 ? prob_hit_log : prob_miss_log);
     }
     if (begin->increments == VoxelUpdate::kNoIncrements) return 0;
-    float* payload = leafPayload(node, edit);
-    const double* add = &batch.increments[size_t(begin->increments) * num_classes_];
-    for (int c = 0; c < num_classes_; ++c) payload[c] += static_cast<float>(add[c]);
+    rule_->add(leafPayload(node, edit), &batch.increments[size_t(begin->increments) * num_classes_],
+               num_classes_);
     return 1;
   }
   if (!is_new && !nodeHasChildren(node)) {

@@ -60,6 +60,7 @@ void readSemanticConfig(const ros::NodeHandle& nh, double resolution, SemanticCo
   nh.param("uncertainty_threshold", c.uncertainty_threshold, c.uncertainty_threshold);
   nh.param("reference_compat", c.reference_compat, c.reference_compat);
   nh.param("sbki_prior", c.sbki_prior, c.sbki_prior);
+  nh.param("evidence_cap", c.evidence_cap, c.evidence_cap);
   nh.param("downsampling", c.downsampling, c.downsampling);
   nh.param("ds_multiplier", c.ds_multiplier, c.ds_multiplier);
   nh.param("kernel_distance", c.kernel_distance, c.kernel_distance);

@@ -26,6 +26,9 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
                 "The authors' released configuration: gamma = 0 (support l*beta*e) and "
                 "count-cap down-sampling");
   cmd->add_option("--sbki-prior", c->sbki_prior, "S-BKI prior alpha0")->capture_default_str();
+  cmd->add_option("--evidence-cap", c->evidence_cap,
+                  "dempster: read opinions with the fused log-evidence capped here (0: no cap)")
+      ->capture_default_str();
   cmd->add_option("--downsampling", c->downsampling,
                   "Semantic input down-sampling: average (grid of resolution/ds_multiplier) or "
                   "count_cap (the authors': at most ds_multiplier+1 points per 2x2x2-voxel block)")
@@ -73,6 +76,9 @@ void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_n
   cmd->add_option("--knn-k", o->knn_k, "Neighbours voting in knn-vote")->capture_default_str();
   cmd->add_option("--knn-radius", o->knn_radius, "Neighbour radius of knn-vote [m]")
       ->capture_default_str();
+  cmd->add_flag("!--no-calibration", o->calibrate,
+                "Derived evidence as is: no rescaling of u to the error rate of such points "
+                "on the mapping scans");
 }
 
 void finishEvidenceOptions(const std::string& source_name, const std::string& classes_path,
@@ -100,6 +106,9 @@ std::string variantName(const SemanticConfig& c) {
     if (c.reference_compat) v += " reference_compat (gamma=0, count cap)";
     if (!c.adaptive_length) v += " w/o adaptive length";
     if (!c.uncertainty_threshold) v += " w/o threshold";
+    if (!(c.evidence_cap > 0.0)) v += " w/o evidence cap";
+    if (c.kernel_distance != SemanticConfig().kernel_distance) v += " kernel distance " + c.kernel_distance;
+    if (c.downsampling != SemanticConfig().downsampling && !c.reference_compat) v += " " + c.downsampling;
   }
   return v;
 }

@@ -26,6 +26,8 @@ struct CompareOptions {
   std::vector<std::string> protocols{"reconstruction", "held-out"};
   std::vector<std::string> variants{"dempster",         "dempster-no-adaptive",
                                     "dempster-no-threshold", "dempster-no-both",
+                                    "dempster-no-cap",  "dempster-centre",
+                                    "dempster-other-downsampling",
                                     "reference_compat", "sbki",
                                     "ebs"};
   std::string rellis_data, rellis_classes;
@@ -52,9 +54,19 @@ SemanticConfig variantConfig(const std::string& v, SemanticConfig c) {
     c.rule = "dempster";
     c.adaptive_length = false;
     c.uncertainty_threshold = false;
-  } else if (v == "reference_compat") {
+  } else if (v == "dempster-no-cap") {  // Dempster's product read as is
+    c.rule = "dempster";
+    c.evidence_cap = 0.0;
+  } else if (v == "dempster-centre") {  // kernel distance to voxel centres (a point can miss
+    c.rule = "dempster";                // its own voxel)
+    c.kernel_distance = "centre";
+  } else if (v == "dempster-other-downsampling") {
+    c.rule = "dempster";
+    c.downsampling = c.downsampling == "average" ? "count_cap" : "average";
+  } else if (v == "reference_compat") {  // the authors' released code: no cap either
     c.rule = "dempster";
     c.reference_compat = true;
+    c.evidence_cap = 0.0;
   } else if (v == "sbki" || v == "ebs") {
     c.rule = v;
   } else {
@@ -337,10 +349,12 @@ void addCompareCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--variants", o->variants,
                   "dempster, dempster-no-adaptive, dempster-no-threshold, dempster-no-both, "
+                  "dempster-no-cap, dempster-centre, dempster-other-downsampling, "
                   "reference_compat, sbki, ebs")
       ->delimiter(',')
       ->check(CLI::IsMember({"dempster", "dempster-no-adaptive", "dempster-no-threshold",
-                             "dempster-no-both", "reference_compat", "sbki", "ebs"}))
+                             "dempster-no-both", "dempster-no-cap", "dempster-centre",
+                             "dempster-other-downsampling", "reference_compat", "sbki", "ebs"}))
       ->capture_default_str();
   cmd->add_option("--rellis-data", o->rellis_data,
                   "RELLIS-3D scan directory (default: rellis3d_example_000104 beside --data)");
@@ -367,6 +381,8 @@ void addCompareCommand(CLI::App& app) {
   cmd->add_option("--learned-model", o->evidence.learned_model,
                   "Model file of the learned source (default: <class table dir>/learned/"
                   "<dataset>.model)");
+  cmd->add_flag("!--no-calibration", o->evidence.calibrate,
+                "Derived evidence as is (no rescaling of u to the error rate of such points)");
   cmd->add_option("--plan", o->plan,
                   "default: every variant with onehot, dempster with/without threshold for "
                   "knn-vote and confusion, held-out dempster/sbki/ebs with onehot (~10 min); "

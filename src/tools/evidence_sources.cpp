@@ -85,6 +85,7 @@ std::string describeEvidence(const EvidenceOptions& o) {
       s << " (cross-fitted; model " << o.learned_model << ")";
       return s.str();
   }
+  if (o.calibrate) s << ", calibrated (u = error rate of such points on the mapping scans)";
   s << " (derived from hard labels)";
   return s.str();
 }

@@ -28,13 +28,16 @@ enum class EvidenceSource { kFile, kOneHot, kKnnVote, kConfusion, kLearned };
 
 struct EvidenceOptions {
   EvidenceSource source = EvidenceSource::kOneHot;
-  float magnitude = 20.0f;   // E
+  float magnitude = 20.0f;   // E (the scale before calibration)
   int knn_k = 8;
   double knn_radius = 0.5;   // [m]
   std::string learned_model;  // model file of kLearned ("": defaultLearnedModel)
   InputConversion conversion;  // kFile: how logits/ and probabilities/ files become evidence
   std::string logit_transform_name = "softmax";  // CLI spelling of conversion.logit_transform
   std::string files;           // kFile: Dataset::describeEvidenceFiles(), for the captions
+  // Derived sources only: rescale every point's evidence so that its u is the error rate of
+  // such points on the mapping scans (evidence_calibration.h).
+  bool calibrate = true;
 };
 
 EvidenceSource evidenceSourceFromName(const std::string& name);  // throws std::invalid_argument

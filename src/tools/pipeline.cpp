@@ -7,6 +7,7 @@
 
 #include <octomap/OcTree.h>
 
+#include "evidence_calibration.h"
 #include "progress_bar.h"
 
 namespace evidential_octomap::tools {
@@ -120,6 +121,20 @@ std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans
   for (size_t s : also) {
     if (evidence[s].empty()) {
       evidence[s] = deriveEvidence(scans.at(s), s, options, C, &model, learned.get());
+    }
+  }
+  if (options.calibrate && derivedFromHardLabels(options.source)) {
+    EvidenceCalibration calibration(C, classes.ignore_class);
+    for (size_t s : which) {
+      if (scans.at(s).gt.size() != scans.at(s).size()) {
+        throw std::runtime_error("calibrating derived evidence needs GT labels of the mapping "
+                                 "scans, scan " + scans.at(s).name + " has none (use "
+                                 "--no-calibration)");
+      }
+      calibration.addScan(s, evidence[s], scans.at(s).gt);
+    }
+    for (size_t s = 0; s < scans.size(); ++s) {
+      if (!evidence[s].empty()) calibration.apply(s, &evidence[s]);
     }
   }
   return evidence;

@@ -72,8 +72,9 @@ Eigen::Matrix4d parse3x4(const std::string& text) {
 }
 
 // The metrics of DESIGN §6 recomputed from scratch for scans 000000 and 000001: the map's
-// answer at a query is its voxel's label when the voxel holds evidence (dempster payload L,
-// p^c = (e^{L^c} - 1 + 1/C) u with u = 1 / (sum e^L - C + 1)), else no label and uniform p.
+// answer at a query is its voxel's label when the voxel holds evidence (dempster payload L read
+// with sum L capped at evidence_cap: L' = L min(1, cap / sum L), p^c = (e^{L'^c} - 1 + 1/C) u
+// with u = 1 / (sum e^L' - C + 1)), else no label and uniform p.
 struct Independent {
   size_t queries = 0, labelled = 0, occupied = 0, correct = 0;
   double brier = 0.0;
@@ -104,14 +105,18 @@ Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
       if (node && node->getLogOdds() >= 0.0f) ++r.occupied;  // occupied: p >= 0.5
       std::vector<long double> prob(C, 1.0L / C);
       int s = -1;
-      if (const float* L = node ? tree.payload(node) : nullptr) {
-        long double sum = 0.0L, best = 0.0L;
+      if (const float* raw = node ? tree.payload(node) : nullptr) {
+        long double total = 0.0L, best = 0.0L;
         for (int c = 0; c < C; ++c) {
-          sum += std::exp((long double)L[c]);
-          if (L[c] > best) best = L[c], s = c;
+          total += raw[c];
+          if (raw[c] > best) best = raw[c], s = c;
         }
+        const long double cap = tree.config().evidence_cap;
+        const long double scale = cap > 0 && total > cap ? cap / total : 1.0L;
+        long double sum = 0.0L;
+        for (int c = 0; c < C; ++c) sum += std::exp(scale * raw[c]);
         const long double u = 1.0L / (sum - C + 1);
-        for (int c = 0; c < C; ++c) prob[c] = (std::exp((long double)L[c]) - 1 + 1.0L / C) * u;
+        for (int c = 0; c < C; ++c) prob[c] = (std::exp(scale * raw[c]) - 1 + 1.0L / C) * u;
       }
       for (int c = 0; c < C; ++c) r.brier += double((prob[c] - (c == gt)) * (prob[c] - (c == gt)));
       if (s >= 0) ++r.labelled;
