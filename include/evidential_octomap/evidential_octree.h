@@ -24,6 +24,9 @@ namespace evidential_octomap {
 class EvidentialOcTree;
 class PayloadPool;
 class ScanIntegrator;
+class SubtreeSource;
+struct SubtreeSeed;
+struct DroppedRows;
 
 class EvidentialOcTreeNode : public octomap::OcTreeNode {
  public:
@@ -66,9 +69,16 @@ struct InsertStats {
   size_t points_dropped_uncertain = 0;  // above the percentile threshold
   double uncertainty_threshold = 0.0;   // U_thr of this scan
   size_t voxels_updated = 0;            // leaves that received semantic evidence
-  double ms_occupancy = 0.0;            // ray casting (free and occupied keys)
-  double ms_kernel = 0.0;               // kernel evaluation and per-voxel aggregation
-  double ms_update = 0.0;  // one tree pass: occupancy + semantics, inner nodes, pruning
+  // Wall time of the three phases [ms]:
+  double ms_occupancy = 0.0;  // ray casting (free and occupied voxels)
+  double ms_kernel = 0.0;     // semantic points: threshold, down-sampling, opinions, supports
+  double ms_update = 0.0;     // one parallel pass over the subtrees: each one's kernel rows (the
+                              // kernel loop), then its leaves, inner nodes and pruning
+  // Process CPU time (all threads) of the same phases [ms], the kernel loop counted in
+  // cpu_ms_kernel although it runs inside the update pass.
+  double cpu_ms_occupancy = 0.0;
+  double cpu_ms_kernel = 0.0;
+  double cpu_ms_update = 0.0;
 };
 
 class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNode> {
@@ -209,6 +219,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   struct Edit;
   struct UpdateBatch;
   struct UpdateTask;
+  struct TopPass;
+  // The integrator hands a scan over subtree by subtree (applySubtrees).
+  friend class ScanIntegrator;
 
   void setNumClasses(int num_classes);
   float* slot(uint32_t index);
@@ -233,9 +246,17 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // "" when an inner node's log-odds are its children's maximum (what updateInnerNode gives it),
   // else what differs. (Its summary is derived from the children and cannot differ.)
   std::string innerNodeProblem(const EvidentialOcTreeNode* node) const;
+  // The batched update (tree_update.cpp): the subtrees `source` has updates for, in parallel;
+  // rows for voxels the map has no leaf for go to `dropped` (one per thread) when given.
+  size_t applySubtrees(SubtreeSource& source, bool create_semantic_leaves, int threads,
+                       std::vector<DroppedRows>* dropped);
+  void applyTopRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
+                      const SubtreeSeed* begin, const SubtreeSeed* end, TopPass& pass, Edit& edit);
   size_t applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
                             const VoxelUpdate* begin, const VoxelUpdate* end,
                             const UpdateBatch& batch, Edit& edit);
+  void keepDropped(const VoxelUpdate* begin, const VoxelUpdate* end,
+                   const UpdateBatch& batch) const;
   // The data section's bytes with their running CRC-32 (ot_format.cpp).
   class SectionWriter;
   class SectionReader;
@@ -253,7 +274,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   std::unique_ptr<FusionRule> rule_;
   std::unique_ptr<PayloadPool> pool_;  // C floats per semantic leaf
   std::string read_error_;
-  bool created_for_read_ = false;  // made by create(), readData not called yet
+  bool created_for_read_ = false;               // made by create(), readData not called yet
   std::unique_ptr<ScanIntegrator> integrator_;  // created on first insert; keeps scratch buffers
 
   // Registers the tree type with AbstractOcTree (the ColorOcTree pattern).

@@ -1,5 +1,7 @@
 // The batched scan update of EvidentialOcTree: one pass over the tree in Morton order, every
-// touched leaf once, inner nodes above touched leaves once, subtrees in parallel.
+// touched leaf once, inner nodes above touched leaves once. The pass walks serially down to the
+// subtrees that receive updates (subtree_updates.h), updates those in parallel, each with the
+// updates its source computes for it, then fixes the inner nodes above them.
 #include <omp.h>
 
 #include <algorithm>
@@ -8,43 +10,25 @@
 #include "evidential_octomap/evidential_octree.h"
 #include "morton.h"
 #include "payload_pool.h"
+#include "radix_sort.h"
+#include "subtree_updates.h"
 #include "tree_edit.h"
 
 namespace evidential_octomap {
 namespace {
 
-// Stable LSD radix sort on the 48-bit Morton code: three 16-bit passes, about twice as fast as
-// std::sort for the ~1.5 M updates of a scan (bench/README.md).
-void radixSortByCode(std::vector<std::pair<uint64_t, uint32_t>>& items) {
-  std::vector<std::pair<uint64_t, uint32_t>> buffer(items.size());
-  std::vector<size_t> offsets(1 << 16);
-  for (int shift = 0; shift < 48; shift += 16) {
-    std::fill(offsets.begin(), offsets.end(), 0);
-    for (const auto& item : items) ++offsets[(item.first >> shift) & 0xFFFF];
-    size_t sum = 0;
-    for (size_t& offset : offsets) sum += std::exchange(offset, sum);
-    for (const auto& item : items) buffer[offsets[(item.first >> shift) & 0xFFFF]++] = item;
-    items.swap(buffer);
-  }
-}
-
-// Subtrees of 2^6 = 64 voxels a side (12.8 m at 0.2 m) are the parallel tasks: a scan spans a
-// few hundred, enough to balance two threads with dynamic scheduling.
-constexpr unsigned kTaskLevels = 6;
 // Payload slots a thread takes from the pool at a time.
 constexpr uint32_t kSlotBatch = 256;
 
-// The end of the run of updates below `child` at `level`, starting at `first` (which is below
+// The end of the run of items below `child` at `level`, starting at `first` (which is below
 // it): runs are contiguous in Morton order, so a galloping search finds the end in O(log run)
-// rather than one step per update at every level.
-const VoxelUpdate* endOfChildRun(const VoxelUpdate* first, const VoxelUpdate* end, int level,
-                                 unsigned child) {
-  auto inRun = [&](const VoxelUpdate* u) {
-    return octomap::computeChildIdx(u->key, level) == child;
-  };
-  const VoxelUpdate* in = first;  // known to be in the run
+// rather than one step per item at every level.
+template <typename Item>
+const Item* endOfChildRun(const Item* first, const Item* end, int level, unsigned child) {
+  auto inRun = [&](const Item* u) { return octomap::computeChildIdx(u->key, level) == child; };
+  const Item* in = first;  // known to be in the run
   size_t step = 1;
-  const VoxelUpdate* out = end;  // known to be past the run (or end)
+  const Item* out = end;  // known to be past the run (or end)
   while (size_t(end - in) > step) {
     if (!inRun(in + step)) {
       out = in + step;
@@ -54,30 +38,66 @@ const VoxelUpdate* endOfChildRun(const VoxelUpdate* first, const VoxelUpdate* en
     step *= 2;
   }
   while (out - in > 1) {
-    const VoxelUpdate* mid = in + (out - in) / 2;
+    const Item* mid = in + (out - in) / 2;
     (inRun(mid) ? in : out) = mid;
   }
   return out;
 }
 
+uint64_t subtreeCode(const octomap::OcTreeKey& key) {
+  return mortonCode(key) >> (3 * kSubtreeLevels);
+}
+
+// A caller's sorted update list as a source: its runs per subtree.
+class ListSource : public SubtreeSource {
+ public:
+  ListSource(const VoxelUpdate* updates, size_t count, const double* rows) : rows_(rows) {
+    for (size_t i = 0; i < count; ++i) {
+      if (i == 0 || subtreeCode(updates[i].key) != subtreeCode(updates[i - 1].key)) {
+        seeds_.push_back({updates[i].key, 0});
+        runs_.push_back(updates + i);
+      }
+      SubtreeSeed& seed = seeds_.back();
+      if (updates[i].occupancy < 0) seed.flags |= SubtreeSeed::kHasMiss;
+      if (updates[i].occupancy > 0) seed.flags |= SubtreeSeed::kHasHit;
+      if (updates[i].increments != VoxelUpdate::kNoIncrements)
+        seed.flags |= SubtreeSeed::kMayHaveRows;
+    }
+    runs_.push_back(updates + count);
+  }
+  const std::vector<SubtreeSeed>& seeds() const override { return seeds_; }
+  SubtreeView updates(size_t i, int) override { return {runs_[i], runs_[i + 1], rows_}; }
+
+ private:
+  const double* rows_;
+  std::vector<SubtreeSeed> seeds_;
+  std::vector<const VoxelUpdate*> runs_;
+};
+
 }  // namespace
 
-// A subtree to update: its root node at the split depth and its run of updates.
+// A subtree to update: its root node at the split depth (nullptr when it has none and gets
+// none: its rows are dropped) and its seed.
 struct EvidentialOcTree::UpdateTask {
   EvidentialOcTreeNode* node;
   bool is_new;
-  const VoxelUpdate* begin;
-  const VoxelUpdate* end;
+  size_t seed;
 };
 
+// What the recursion inside one subtree needs besides the updates.
 struct EvidentialOcTree::UpdateBatch {
-  const std::vector<double>& increments;
+  const double* rows;
   bool create_semantic_leaves;
-  // Recursion above this depth collects tasks and the inner nodes on their paths (post-order)
-  // instead of descending; > tree_depth means no split.
-  unsigned split_depth;
-  std::vector<UpdateTask>* tasks;
-  std::vector<EvidentialOcTreeNode*>* above;
+  DroppedRows* dropped;  // nullptr: dropped rows are not kept
+};
+
+// The serial walk down to the subtrees.
+struct EvidentialOcTree::TopPass {
+  const SubtreeSeed* seeds;
+  bool create_semantic_leaves;
+  bool keep_dropped;
+  std::vector<UpdateTask> tasks;
+  std::vector<EvidentialOcTreeNode*> above;  // inner nodes above the subtrees, post-order
 };
 
 size_t EvidentialOcTree::applyUpdates(std::vector<VoxelUpdate> updates,
@@ -86,7 +106,8 @@ size_t EvidentialOcTree::applyUpdates(std::vector<VoxelUpdate> updates,
   if (updates.empty()) return 0;
   std::vector<std::pair<uint64_t, uint32_t>> order(updates.size());
   for (size_t i = 0; i < updates.size(); ++i) order[i] = {mortonCode(updates[i].key), uint32_t(i)};
-  radixSortByCode(order);
+  std::vector<std::pair<uint64_t, uint32_t>> buffer;
+  radixSort(&order, 48, &buffer);
   // Sorted and merged per key: occupancy from the ray set, increments from the kernel.
   std::vector<VoxelUpdate> sorted;
   sorted.reserve(updates.size());
@@ -109,40 +130,51 @@ size_t EvidentialOcTree::applyUpdates(std::vector<VoxelUpdate> updates,
 size_t EvidentialOcTree::applySortedUpdates(const VoxelUpdate* updates, size_t count,
                                             const std::vector<double>& increments,
                                             bool create_semantic_leaves) {
-  if (count == 0) return 0;
+  ListSource source(updates, count, increments.data());
+  const int threads = config_.threads > 0 ? config_.threads : omp_get_max_threads();
+  return applySubtrees(source, create_semantic_leaves, threads, nullptr);
+}
+
+size_t EvidentialOcTree::applySubtrees(SubtreeSource& source, bool create_semantic_leaves,
+                                       int threads, std::vector<DroppedRows>* dropped) {
+  const std::vector<SubtreeSeed>& seeds = source.seeds();
+  if (dropped) dropped->assign(threads, DroppedRows());
+  if (seeds.empty()) return 0;
   bool is_new = false;
   if (!root) {
     root = new EvidentialOcTreeNode();
     ++tree_size;
     is_new = true;
   }
-  const int threads = config_.threads > 0 ? config_.threads : omp_get_max_threads();
-  std::vector<UpdateTask> tasks;
-  std::vector<EvidentialOcTreeNode*> above;
-  const bool split = threads > 1;
-  const UpdateBatch batch{increments, create_semantic_leaves,
-                          split ? tree_depth - kTaskLevels : tree_depth + 1,
-                          split ? &tasks : nullptr, split ? &above : nullptr};
-  // 1. Serially down to the split depth: nodes on the way are made or split, tasks collected.
+  // 1. Serially down to the subtrees: nodes on the way are made or split, tasks collected.
   Edit top(pool_.get(), 1);
-  size_t changed = applyUpdatesRecurs(root, 0, is_new, updates, updates + count, batch, top);
+  TopPass pass{seeds.data(), create_semantic_leaves, dropped != nullptr, {}, {}};
+  applyTopRecurs(root, 0, is_new, seeds.data(), seeds.data() + seeds.size(), pass, top);
   // 2. The subtrees, in parallel: each thread edits its own subtrees with its own Edit.
-  const UpdateBatch within{increments, create_semantic_leaves, tree_depth + 1, nullptr, nullptr};
+  size_t changed = 0;
   std::vector<long long> nodes(threads, 0);
-#pragma omp parallel num_threads(threads) reduction(+ : changed) if (tasks.size() > 1)
+#pragma omp parallel num_threads(threads) reduction(+ : changed)
   {
+    const int thread = omp_get_thread_num();
     Edit edit(pool_.get(), kSlotBatch);
+    DroppedRows* keep = dropped ? &(*dropped)[thread] : nullptr;
 #pragma omp for schedule(dynamic, 1)
-    for (size_t i = 0; i < tasks.size(); ++i) {
-      const UpdateTask& t = tasks[i];
-      changed += applyUpdatesRecurs(t.node, tree_depth - kTaskLevels, t.is_new, t.begin, t.end,
-                                    within, edit);
+    for (size_t i = 0; i < pass.tasks.size(); ++i) {
+      const UpdateTask& task = pass.tasks[i];
+      const SubtreeView view = source.updates(task.seed, thread);
+      const UpdateBatch batch{view.rows, create_semantic_leaves, keep};
+      if (task.node) {
+        changed += applyUpdatesRecurs(task.node, tree_depth - kSubtreeLevels, task.is_new,
+                                      view.begin, view.end, batch, edit);
+      } else {
+        keepDropped(view.begin, view.end, batch);
+      }
     }
     edit.slots.flush();
-    nodes[omp_get_thread_num()] = edit.nodes;
+    nodes[thread] = edit.nodes;
   }
   // 3. The inner nodes above the subtrees, bottom-up.
-  for (EvidentialOcTreeNode* node : above) {
+  for (EvidentialOcTreeNode* node : pass.above) {
     if (nodeHasChildren(node)) updateInnerNode(node, top);
   }
   for (long long n : nodes) top.nodes += n;
@@ -150,19 +182,73 @@ size_t EvidentialOcTree::applySortedUpdates(const VoxelUpdate* updates, size_t c
   return changed;
 }
 
+void EvidentialOcTree::applyTopRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
+                                      const SubtreeSeed* begin, const SubtreeSeed* end,
+                                      TopPass& pass, Edit& edit) {
+  if (depth == tree_depth - kSubtreeLevels) {  // one subtree, one seed
+    pass.tasks.push_back({node, is_new, size_t(begin - pass.seeds)});
+    return;
+  }
+  if (!is_new && !nodeHasChildren(node)) {
+    // A pruned block: misses on a block at the lower clamp, or hits on one at the upper clamp,
+    // change nothing (OctoMap's early abort); anything else splits it.
+    const bool at_min = node->getLogOdds() <= clamping_thres_min;
+    const bool at_max = node->getLogOdds() >= clamping_thres_max;
+    bool unchanged = at_min || at_max;
+    for (const SubtreeSeed* s = begin; unchanged && s != end; ++s) {
+      unchanged = !(s->flags & SubtreeSeed::kMayHaveRows) &&
+                  !(at_min && (s->flags & SubtreeSeed::kHasHit)) &&
+                  !(at_max && (s->flags & SubtreeSeed::kHasMiss));
+    }
+    if (unchanged) return;
+    expandLeaf(node, edit);
+  }
+  const int level = static_cast<int>(tree_depth - 1 - depth);
+  for (const SubtreeSeed* first = begin; first != end;) {
+    const unsigned child = octomap::computeChildIdx(first->key, level);
+    const SubtreeSeed* last = endOfChildRun(first, end, level, child);
+    bool created = false;
+    if (!nodeChildExists(node, child) &&
+        (pass.create_semantic_leaves || std::any_of(first, last, [](const SubtreeSeed& s) {
+           return (s.flags & (SubtreeSeed::kHasMiss | SubtreeSeed::kHasHit)) != 0;
+         }))) {
+      createChild(node, child, edit);
+      created = true;
+    }
+    if (nodeChildExists(node, child)) {
+      applyTopRecurs(getNodeChild(node, child), depth + 1, created, first, last, pass, edit);
+    } else if (pass.keep_dropped) {  // nothing there: the subtrees' rows are dropped
+      for (const SubtreeSeed* s = first; s != last; ++s) {
+        pass.tasks.push_back({nullptr, false, size_t(s - pass.seeds)});
+      }
+    }
+    first = last;
+  }
+  pass.above.push_back(node);  // after its children: post-order
+}
+
+void EvidentialOcTree::keepDropped(const VoxelUpdate* begin, const VoxelUpdate* end,
+                                   const UpdateBatch& batch) const {
+  if (!batch.dropped) return;
+  for (const VoxelUpdate* u = begin; u != end; ++u) {
+    if (u->increments == VoxelUpdate::kNoIncrements) continue;
+    const double* row = batch.rows + size_t(u->increments) * num_classes_;
+    auto& rows = batch.dropped->rows;
+    batch.dropped->updates.push_back(
+        {u->key, 0, static_cast<uint32_t>(rows.size() / num_classes_)});
+    rows.insert(rows.end(), row, row + num_classes_);
+  }
+}
+
 size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
                                             const VoxelUpdate* begin, const VoxelUpdate* end,
                                             const UpdateBatch& batch, Edit& edit) {
-  if (depth == batch.split_depth) {
-    batch.tasks->push_back({node, is_new, begin, end});
-    return 0;
-  }
   if (depth == tree_depth) {  // one voxel, one merged update
     if (begin->occupancy != 0) {
       updateNodeLogOdds(node, begin->occupancy > 0 ? prob_hit_log : prob_miss_log);
     }
     if (begin->increments == VoxelUpdate::kNoIncrements) return 0;
-    rule_->add(leafPayload(node, edit), &batch.increments[size_t(begin->increments) * num_classes_],
+    rule_->add(leafPayload(node, edit), batch.rows + size_t(begin->increments) * num_classes_,
                num_classes_);
     return 1;
   }
@@ -194,14 +280,12 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
     if (nodeChildExists(node, child)) {
       changed += applyUpdatesRecurs(getNodeChild(node, child), depth + 1, created, first, last,
                                     batch, edit);
+    } else {
+      keepDropped(first, last, batch);  // rows for voxels the map does not have
     }
     first = last;
   }
-  if (depth < batch.split_depth && batch.above) {
-    batch.above->push_back(node);  // after its children: post-order
-  } else if (nodeHasChildren(node)) {
-    updateInnerNode(node, edit);
-  }
+  if (nodeHasChildren(node)) updateInnerNode(node, edit);
   return changed;
 }
 

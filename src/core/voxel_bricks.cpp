@@ -83,6 +83,25 @@ void VoxelBricks::merge(const VoxelBricks& other) {
   last_coarse_ = ~0ull;
 }
 
+unsigned VoxelBricks::sortedFlags(size_t i) const {
+  const Brick& brick = bricks_[sorted_[i].second];
+  unsigned flags = 0;
+  for (int flag = 0; flag < kFlags; ++flag) {
+    uint64_t any = 0;
+    for (int w = 0; w < 8; ++w) any |= brick.bits[flag][w];
+    if (any) flags |= 1u << flag;
+  }
+  return flags;
+}
+
+bool VoxelBricks::sortedAnyWithout(size_t i, int flag, int without) const {
+  const Brick& brick = bricks_[sorted_[i].second];
+  for (int w = 0; w < 8; ++w) {
+    if (brick.bits[flag][w] & ~brick.bits[without][w]) return true;
+  }
+  return false;
+}
+
 void VoxelBricks::sortBricks() {
   sorted_.resize(codes_.size());
   for (uint32_t i = 0; i < codes_.size(); ++i) sorted_[i] = {codes_[i], i};

@@ -44,7 +44,18 @@ class VoxelBricks {
   // bit i set for flag i. sortBricks() must have been called after the last insertion.
   void sortBricks();
   template <typename F>
-  void forEachSorted(F&& f) const;
+  void forEachSorted(F&& f) const {
+    forEachSorted(0, sorted_.size(), f);
+  }
+  // The same for the sorted bricks first .. last - 1.
+  template <typename F>
+  void forEachSorted(size_t first, size_t last, F&& f) const;
+  // The sorted bricks: Morton code of key >> 3 of the i-th, and which flags any of its voxels
+  // has (bit i for flag i).
+  uint64_t sortedCode(size_t i) const { return sorted_[i].first; }
+  unsigned sortedFlags(size_t i) const;
+  // Whether a voxel of the i-th sorted brick has `flag` but not `without`.
+  bool sortedAnyWithout(size_t i, int flag, int without) const;
 
  private:
   struct Brick {
@@ -94,9 +105,10 @@ struct BrickOffsets {
 const BrickOffsets& brickOffsets();
 
 template <typename F>
-void VoxelBricks::forEachSorted(F&& f) const {
+void VoxelBricks::forEachSorted(size_t first, size_t last, F&& f) const {
   const BrickOffsets& offsets = brickOffsets();
-  for (const auto& [code, index] : sorted_) {
+  for (size_t s = first; s < last; ++s) {
+    const auto& [code, index] = sorted_[s];
     const octomap::OcTreeKey base = keyFromMorton(code);
     const Brick& brick = bricks_[index];
     for (unsigned w = 0; w < 8; ++w) {

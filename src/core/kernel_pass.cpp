@@ -1,0 +1,112 @@
+#include "kernel_pass.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "evidential_octomap/kernel.h"
+#include "subtree_updates.h"
+
+namespace evidential_octomap {
+
+KernelTable::KernelTable(double sigma0) : sigma0_(sigma0), values_(kSteps + 1) {
+  for (int i = 0; i <= kSteps; ++i)
+    values_[i] = sparseKernel(std::sqrt(double(i) / kSteps), 1.0, sigma0);
+}
+
+KernelPass::KernelPass(const SemanticConfig& config, const EvidentialOcTree& tree)
+    : tree_(tree),
+      rule_(tree.rule()),
+      num_classes_(tree.numClasses()),
+      length_scale_(config.length_scale),
+      beta_(config.beta),
+      gamma_(config.effectiveGamma()),
+      uncertainty_kernel_(tree.rule().usesUncertaintyKernel()),
+      to_cube_(config.kernel_distance == "voxel"),
+      table_(config.sigma0) {}
+
+void KernelPass::preparePoints(const SemanticPoints& points, int threads,
+                               std::vector<KernelPoint>* out) const {
+  const size_t m = points.positions.size();
+  const double resolution = tree_.getResolution();
+  out->resize(m);
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (size_t j = 0; j < m; ++j) {
+    KernelPoint& kp = (*out)[j];
+    PointOpinion& o = kp.opinion;
+    o = PointOpinion();
+    o.evidence = &points.evidence[j * num_classes_];
+    o.strength = num_classes_;
+    float best = 0.0f;
+    for (int c = 0; c < num_classes_; ++c) {
+      o.strength += o.evidence[c];
+      if (o.evidence[c] > best) {
+        best = o.evidence[c];
+        o.argmax = c;
+      }
+    }
+    o.uncertainty = num_classes_ / o.strength;
+    // S-BKI uses the plain length l; the uncertainty kernels l beta e^{1 - gamma u}.
+    const float length = static_cast<float>(
+        uncertainty_kernel_ ? adaptiveLength(length_scale_, beta_, gamma_, o.uncertainty)
+                            : length_scale_);
+    kp.inv_length2 = 1.0 / (double(length) * length);
+    // A voxel can take part when its cube (or centre) is within L on every axis.
+    kp.reach = static_cast<int>(std::floor(length / resolution + (to_cube_ ? 1.0 : 0.5))) + 1;
+    kp.key = tree_.coordToKey(points.positions[j]);
+  }
+}
+
+void KernelPass::scatter(const KernelPoint& point, const octomap::point3d& position,
+                         const octomap::OcTreeKey& base, KernelRows* out) const {
+  constexpr int kSize = 1 << kSubtreeLevels;
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(-point.reach, int(base[a]) - int(point.key[a]));
+    hi[a] = std::min(point.reach, int(base[a]) + kSize - 1 - int(point.key[a]));
+    if (lo[a] > hi[a]) return;
+  }
+  // d^2 = sum over the axes of a term per axis offset: the gap between the point and the
+  // voxel's cube (or centre) along that axis, squared and divided by L^2.
+  const double half = tree_.getResolution() / 2.0;
+  const double inv_length2 = point.inv_length2;
+  std::vector<double>& terms = out->axis_terms;
+  terms.resize(3 * (2 * point.reach + 1));
+  double* axis[3];
+  for (int a = 0; a < 3; ++a) {
+    axis[a] = &terms[a * (2 * point.reach + 1)] - lo[a];
+    for (int o = lo[a]; o <= hi[a]; ++o) {
+      const float centre =
+          static_cast<float>(tree_.keyToCoord(static_cast<octomap::key_type>(point.key[a] + o)));
+      const float d = position(a) - centre;
+      const double gap = to_cube_ ? std::max(std::fabs(double(d)) - half, 0.0) : double(d);
+      axis[a][o] = gap * gap * inv_length2;
+    }
+  }
+  const int x0 = int(point.key[0]) - int(base[0]), y0 = int(point.key[1]) - int(base[1]),
+            z0 = int(point.key[2]) - int(base[2]);
+  for (int ox = lo[0]; ox <= hi[0]; ++ox) {
+    const double sx = axis[0][ox];
+    if (sx >= 1.0) continue;
+    for (int oy = lo[1]; oy <= hi[1]; ++oy) {
+      const double sxy = sx + axis[1][oy];
+      if (sxy >= 1.0) continue;
+      for (int oz = lo[2]; oz <= hi[2]; ++oz) {
+        const double k = table_(sxy + axis[2][oz]);
+        if (k <= 0.0) continue;
+        const uint32_t local =
+            uint32_t((z0 + oz) << (2 * kSubtreeLevels) | (y0 + oy) << kSubtreeLevels | (x0 + ox));
+        uint32_t& row = out->index[local];
+        if (row == KernelRows::kNone) {
+          row = static_cast<uint32_t>(out->touched.size());
+          out->touched.push_back(local);
+          out->rows.resize(out->rows.size() + num_classes_, 0.0);
+        }
+        rule_.contribute(point.opinion, k, num_classes_, &out->rows[size_t(row) * num_classes_]);
+      }
+    }
+  }
+}
+
+}  // namespace evidential_octomap

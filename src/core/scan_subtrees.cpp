@@ -1,0 +1,171 @@
+#include "scan_subtrees.h"
+
+#include <time.h>
+
+#include <algorithm>
+#include <limits>
+
+#include "morton.h"
+#include "radix_sort.h"
+#include "ray_casting.h"
+
+namespace evidential_octomap {
+namespace {
+
+constexpr unsigned kBrickLevels = 3;  // VoxelBricks: 8^3 voxels
+constexpr int kSubtreeSize = 1 << kSubtreeLevels;
+
+uint64_t subtreeOfBrick(uint64_t brick_code) {
+  return brick_code >> (3 * (kSubtreeLevels - kBrickLevels));
+}
+
+// The first voxel of the subtree with Morton code `code` (of its key >> kSubtreeLevels).
+octomap::OcTreeKey subtreeBase(uint64_t code) {
+  const octomap::OcTreeKey coarse = keyFromMorton(code);
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(coarse[0] << kSubtreeLevels),
+                            static_cast<octomap::key_type>(coarse[1] << kSubtreeLevels),
+                            static_cast<octomap::key_type>(coarse[2] << kSubtreeLevels));
+}
+
+double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+}  // namespace
+
+void ScanSubtrees::build(const VoxelBricks& rays, const SemanticPoints& points,
+                         const std::vector<KernelPoint>& kernel_points, const KernelPass& kernel,
+                         int threads) {
+  rays_ = &rays;
+  points_ = &points;
+  kernel_points_ = &kernel_points;
+  kernel_ = &kernel;
+  threads_.resize(threads);
+  for (PerThread& t : threads_) {
+    t.kernel.index.resize(size_t(1) << (3 * kSubtreeLevels), KernelRows::kNone);
+    t.kernel_cpu_ms = 0.0;
+  }
+  collectPointSubtrees();
+  mergeSeeds();
+}
+
+// Every (subtree, point) pair where the point's support may reach the subtree: mostly its own
+// subtree, two to eight for points near a subtree's faces.
+void ScanSubtrees::collectPointSubtrees() {
+  point_subtrees_.clear();
+  const std::vector<KernelPoint>& points = *kernel_points_;
+  for (size_t j = 0; j < points.size(); ++j) {
+    const KernelPoint& p = points[j];
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, int(p.key[a]) - p.reach) >> kSubtreeLevels;
+      hi[a] = std::min(0xFFFF, int(p.key[a]) + p.reach) >> kSubtreeLevels;
+    }
+    for (int x = lo[0]; x <= hi[0]; ++x)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int z = lo[2]; z <= hi[2]; ++z) {
+          const octomap::OcTreeKey coarse(static_cast<octomap::key_type>(x),
+                                          static_cast<octomap::key_type>(y),
+                                          static_cast<octomap::key_type>(z));
+          point_subtrees_.emplace_back(mortonCode(coarse), static_cast<uint32_t>(j));
+        }
+  }
+  std::vector<std::pair<uint64_t, uint32_t>> buffer;
+  radixSort(&point_subtrees_, 3 * (16 - kSubtreeLevels), &buffer);  // stable: points in order
+}
+
+// The subtrees with ray voxels or points in reach, in Morton order.
+void ScanSubtrees::mergeSeeds() {
+  seeds_.clear();
+  ranges_.clear();
+  constexpr uint64_t kEnd = std::numeric_limits<uint64_t>::max();
+  const size_t bricks = rays_->numBricks();
+  size_t b = 0, p = 0;
+  while (b < bricks || p < point_subtrees_.size()) {
+    const uint64_t from_rays = b < bricks ? subtreeOfBrick(rays_->sortedCode(b)) : kEnd;
+    const uint64_t from_points = p < point_subtrees_.size() ? point_subtrees_[p].first : kEnd;
+    const uint64_t code = std::min(from_rays, from_points);
+    Range range{b, b, p, p};
+    uint8_t flags = 0;
+    for (; b < bricks && subtreeOfBrick(rays_->sortedCode(b)) == code; ++b) {
+      if (rays_->sortedAnyWithout(b, kRayFree, kRayOccupied)) flags |= SubtreeSeed::kHasMiss;
+      if (rays_->sortedFlags(b) & (1u << kRayOccupied)) flags |= SubtreeSeed::kHasHit;
+    }
+    range.last_brick = b;
+    for (; p < point_subtrees_.size() && point_subtrees_[p].first == code; ++p) {
+      flags |= SubtreeSeed::kMayHaveRows;
+    }
+    range.last_point = p;
+    if (flags == 0) continue;  // only rays clipped at max range ended here: no update
+    seeds_.push_back({subtreeBase(code), flags});
+    ranges_.push_back(range);
+  }
+}
+
+SubtreeView ScanSubtrees::updates(size_t i, int thread) {
+  PerThread& t = threads_[thread];
+  const Range& range = ranges_[i];
+  const octomap::OcTreeKey& base = seeds_[i].key;
+  // 1. The kernel rows of the subtree, in Morton order.
+  const double start = threadCpuMs();
+  KernelRows& kernel = t.kernel;
+  kernel.touched.clear();
+  kernel.rows.clear();
+  for (size_t p = range.first_point; p < range.last_point; ++p) {
+    const uint32_t j = point_subtrees_[p].second;
+    kernel_->scatter((*kernel_points_)[j], points_->positions[j], base, &kernel);
+  }
+  t.order.clear();
+  for (uint32_t row = 0; row < kernel.touched.size(); ++row) {
+    const uint32_t local = kernel.touched[row];
+    const uint64_t x = local % kSubtreeSize, y = (local >> kSubtreeLevels) % kSubtreeSize,
+                   z = local >> (2 * kSubtreeLevels);
+    t.order.emplace_back(
+        static_cast<uint32_t>(spreadBits3(z) << 2 | spreadBits3(y) << 1 | spreadBits3(x)), row);
+    kernel.index[local] = KernelRows::kNone;
+  }
+  std::sort(t.order.begin(), t.order.end());
+  t.kernel_cpu_ms += threadCpuMs() - start;
+  // 2. Merged with the ray voxels: occupied wins over free; one update per key.
+  const uint64_t subtree_code = mortonCode(base);  // its low 3 * kSubtreeLevels bits are 0
+  auto row = t.order.cbegin();
+  auto emitRow = [&]() {
+    const octomap::OcTreeKey local = keyFromMorton(row->first);
+    t.updates.push_back({octomap::OcTreeKey(static_cast<octomap::key_type>(base[0] + local[0]),
+                                            static_cast<octomap::key_type>(base[1] + local[1]),
+                                            static_cast<octomap::key_type>(base[2] + local[2])),
+                         0, row->second});
+    ++row;
+  };
+  t.updates.clear();
+  rays_->forEachSorted(range.first_brick, range.last_brick,
+                       [&](const octomap::OcTreeKey& voxel, uint64_t code, unsigned flags) {
+                         while (row != t.order.cend() && (subtree_code | row->first) < code) {
+                           emitRow();
+                         }
+                         VoxelUpdate u{voxel, 0};
+                         if (flags & (1u << kRayOccupied)) {
+                           u.occupancy = +1;
+                         } else if (flags & (1u << kRayFree)) {
+                           u.occupancy = -1;
+                         }
+                         if (row != t.order.cend() && (subtree_code | row->first) == code) {
+                           u.increments = (row++)->second;
+                         }
+                         if (u.occupancy != 0 || u.increments != VoxelUpdate::kNoIncrements) {
+                           t.updates.push_back(u);
+                         }
+                       });
+  while (row != t.order.cend()) emitRow();
+  return {t.updates.data(), t.updates.data() + t.updates.size(), kernel.rows.data()};
+}
+
+double ScanSubtrees::kernelCpuMs() const {
+  double sum = 0.0;
+  for (const PerThread& t : threads_) sum += t.kernel_cpu_ms;
+  return sum;
+}
+
+}  // namespace evidential_octomap

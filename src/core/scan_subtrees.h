@@ -1,0 +1,50 @@
+// One scan's updates, subtree by subtree (subtree_updates.h): the voxels its rays crossed or
+// ended in (VoxelBricks) merged in Morton order with the kernel rows that its semantic points
+// give the subtree (KernelPass), computed when the tree update asks for the subtree. Private to
+// the core.
+#pragma once
+
+#include <vector>
+
+#include "kernel_pass.h"
+#include "subtree_updates.h"
+#include "voxel_bricks.h"
+
+namespace evidential_octomap {
+
+class ScanSubtrees : public SubtreeSource {
+ public:
+  // rays: sorted, with the flags of ray_casting.h. points / kernel_points: the semantic points.
+  // All must outlive the source.
+  void build(const VoxelBricks& rays, const SemanticPoints& points,
+             const std::vector<KernelPoint>& kernel_points, const KernelPass& kernel, int threads);
+  const std::vector<SubtreeSeed>& seeds() const override { return seeds_; }
+  SubtreeView updates(size_t i, int thread) override;
+  // CPU time the threads spent in the kernel loop since build() [ms].
+  double kernelCpuMs() const;
+
+ private:
+  struct Range {
+    size_t first_brick, last_brick;  // in rays->sorted bricks
+    size_t first_point, last_point;  // in point_subtrees_
+  };
+  struct PerThread {
+    KernelRows kernel;
+    std::vector<std::pair<uint32_t, uint32_t>> order;  // (local Morton code, row)
+    std::vector<VoxelUpdate> updates;
+    double kernel_cpu_ms = 0.0;
+  };
+  void collectPointSubtrees();
+  void mergeSeeds();
+
+  const VoxelBricks* rays_ = nullptr;
+  const SemanticPoints* points_ = nullptr;
+  const std::vector<KernelPoint>* kernel_points_ = nullptr;
+  const KernelPass* kernel_ = nullptr;
+  std::vector<std::pair<uint64_t, uint32_t>> point_subtrees_;  // (subtree code, point), sorted
+  std::vector<SubtreeSeed> seeds_;
+  std::vector<Range> ranges_;
+  std::vector<PerThread> threads_;
+};
+
+}  // namespace evidential_octomap

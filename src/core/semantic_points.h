@@ -1,0 +1,46 @@
+// The points of a scan that give semantic evidence: the percentile threshold (DESIGN §1) and the
+// down-sampling of SemanticConfig, computed in parallel with sorting instead of hash maps.
+// Private to the core.
+#pragma once
+
+#include <octomap/octomap_types.h>
+
+#include <vector>
+
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/semantic_config.h"
+
+namespace evidential_octomap {
+
+// Points that may give semantic evidence: inside the map and within max_range.
+struct RawPoints {
+  std::vector<octomap::point3d> positions;
+  std::vector<const float*> evidence;  // C values each, into the caller's array
+  void clear() {
+    positions.clear();
+    evidence.clear();
+  }
+};
+
+// Points and evidence that take part in the kernel pass.
+struct SemanticPoints {
+  std::vector<octomap::point3d> positions;
+  std::vector<float> evidence;  // M x C
+};
+
+// Buffers of selectSemanticPoints, kept from scan to scan.
+struct SemanticScratch {
+  std::vector<float> uncertainty;
+  std::vector<std::pair<uint64_t, uint32_t>> cells, buffer;  // (cell key, point), sorted
+  std::vector<uint32_t> runs;                                // first point of every cell
+};
+
+// Drops the points above the scan's percentile U_thr of their uncertainty (over the points
+// before any down-sampling, as the authors do), then down-samples what is left; `stats` gets
+// U_thr and the number of points dropped. The result is in the order of the down-sampling
+// cells' keys; the evidence of a cell sums in the input order.
+void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticConfig& config,
+                          bool use_threshold, double resolution, int threads,
+                          SemanticScratch* scratch, SemanticPoints* out, InsertStats* stats);
+
+}  // namespace evidential_octomap
