@@ -7,13 +7,19 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Empty.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
+#ifdef EVIDENTIAL_OCTOMAP_HAVE_OCTOMAP_MSGS
+#include <octomap_msgs/Octomap.h>
+#endif
 
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <vector>
@@ -109,6 +115,19 @@ TEST_F(NodeIoTest, LateSubscribersGetEveryView) {
   });
   expectReceived<eo::OccupancyMap>(nh_, "occupancy_map",
                                    [](const eo::OccupancyMap& m) { return m.data.size() > 400; });
+  expectReceived<MarkerArray>(nh_, "conflict_cells_vis_array", many_cubes);
+  expectReceived<MarkerArray>(nh_, "free_cells_vis_array", many_cubes);
+  expectReceived<nav_msgs::OccupancyGrid>(
+      nh_, "projected_map", [](const nav_msgs::OccupancyGrid& g) {
+        return std::count(g.data.begin(), g.data.end(), 100) > 10;
+      });
+  expectReceived<sensor_msgs::Image>(nh_, kNode + "/legend",
+                                     [](const sensor_msgs::Image& i) { return i.height > 100; });
+#ifdef EVIDENTIAL_OCTOMAP_HAVE_OCTOMAP_MSGS
+  for (const char* topic : {"octomap_binary", "octomap_full", "evidential_octomap_full"})
+    expectReceived<octomap_msgs::Octomap>(
+        nh_, topic, [](const octomap_msgs::Octomap& m) { return m.data.size() > 100; });
+#endif
 }
 
 TEST_F(NodeIoTest, EveryCloudOfABurstIsInsertedOrCountedAsDropped) {
