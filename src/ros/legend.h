@@ -1,6 +1,7 @@
 // The legend rviz shows beside the map (an Image display on ~legend): one colour swatch and name
 // per class of the class table, then the colour bars of the uncertainty and conflict views with
-// their value range. Drawn with OpenCV; RGB, 8 bit.
+// their value range. Drawn with OpenCV; RGB, 8 bit; wider than tall so that rviz's image panel
+// shrinks it little.
 #pragma once
 
 #include <opencv2/core.hpp>
@@ -11,22 +12,29 @@
 
 namespace evidential_octomap {
 
+// Classes in two columns (plus "no evidence"), then the two colour bars side by side.
 struct LegendLayout {
-  static constexpr int kWidth = 300;
-  static constexpr int kRow = 20;     // height of one class row [px]
-  static constexpr int kSwatch = 14;  // side of a class swatch [px]
+  static constexpr int kWidth = 440;
+  static constexpr int kColumn = kWidth / 2;
+  static constexpr int kRow = 18;     // height of one class row [px]
+  static constexpr int kSwatch = 13;  // side of a class swatch [px]
   static constexpr int kMargin = 8;
-  static constexpr int kBarHeight = 16;
-  static constexpr int kBarWidth = kWidth - 2 * kMargin;
-  // Top of the swatch of class c, and of the two bars (below the class rows).
-  static int swatchTop(int c) { return kMargin + kRow + c * kRow + (kRow - kSwatch) / 2; }
-  static int uncertaintyBarTop(int num_classes) {
-    return kMargin + (num_classes + 2) * kRow + kRow;
+  static constexpr int kTitle = 24;  // height of the title line [px]
+  static constexpr int kBarHeight = 14;
+  static constexpr int kBarWidth = kColumn - 2 * kMargin;
+  // Rows per column for C classes and the "no evidence" entry.
+  static int rows(int num_classes) { return (num_classes + 2) / 2; }
+  // Top-left corner of the swatch of entry i (class i, or C: no evidence).
+  static int swatchLeft(int i, int num_classes) {
+    return kMargin + (i / rows(num_classes)) * kColumn;
   }
-  static int conflictBarTop(int num_classes) {
-    return uncertaintyBarTop(num_classes) + kBarHeight + 3 * kRow;
+  static int swatchTop(int i, int num_classes) {
+    return kTitle + (i % rows(num_classes)) * kRow + (kRow - kSwatch) / 2;
   }
-  static int height(int num_classes) { return conflictBarTop(num_classes) + kBarHeight + 2 * kRow; }
+  // Left edge of the uncertainty (0) and conflict (1) bars; both start at barTop.
+  static int barLeft(int bar) { return kMargin + bar * kColumn; }
+  static int barTop(int num_classes) { return kTitle + rows(num_classes) * kRow + 26; }
+  static int height(int num_classes) { return barTop(num_classes) + kBarHeight + 22; }
 };
 
 // `uncertainty_name` says what the uncertainty is (the mass u for dempster, a scaled Dirichlet

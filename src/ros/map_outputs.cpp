@@ -36,9 +36,7 @@ void stampAndSend(StaleOutput* output, Message message, const ros::Time& time) {
 }
 
 std::string uncertaintyName(const EvidentialOcTree& tree) {
-  return tree.rule().uncertaintyIsMass()
-             ? "uncertainty u (no evidence: 1)"
-             : "uncertainty (" + tree.rule().name() + ": Dirichlet variance)";
+  return tree.rule().uncertaintyIsMass() ? "uncertainty u" : "uncertainty (Dirichlet var.)";
 }
 
 }  // namespace
@@ -106,10 +104,10 @@ std::string MapOutputs::publishViews(const EvidentialOcTree& tree, const ClassTa
   }
   const unsigned depth = tree.getTreeDepth();
   const std::string& frame = config_.frame_id;
-  size_t drawn = 0;
+  size_t n_occupied = 0, n_free = 0;
   if (occupied) {
     const std::vector<VoxelView> voxels = occupiedVoxels(tree, box, config_.occupancy_band);
-    drawn += voxels.size();
+    n_occupied = voxels.size();
     if (semantic_markers_.wanted(force))
       stampAndSend(&semantic_markers_, semanticMarkers(voxels, classes, frame, depth), now);
     if (uncertainty_markers_.wanted(force)) {
@@ -127,11 +125,12 @@ std::string MapOutputs::publishViews(const EvidentialOcTree& tree, const ClassTa
   }
   if (free) {
     const std::vector<VoxelView> voxels = freeVoxels(tree, box, config_.occupancy_band);
-    drawn += voxels.size();
+    n_free = voxels.size();
     stampAndSend(&free_markers_, freeMarkers(voxels, frame, depth), now);
   }
   char part[96];
-  std::snprintf(part, sizeof(part), " views of %zu voxels (%.0f ms)", drawn, msSince(t0));
+  std::snprintf(part, sizeof(part), " views of %zu occupied + %zu free voxels (%.0f ms)",
+                n_occupied, n_free, msSince(t0));
   return part;
 }
 
@@ -148,21 +147,26 @@ std::string MapOutputs::publishMaps(const EvidentialOcTree& tree, const ClassTab
     std::snprintf(part, sizeof(part), " evidential_map (%.1f MB, %.0f ms)", mb, msSince(t));
     sent += part;
   }
-  if (occupancy_map_.wanted(force)) {
-    stampAndSend(&occupancy_map_, toOccupancyMap(tree, frame), now);
-    sent += " occupancy_map";
-  }
-  if (projected_map_.wanted(force)) {
-    stampAndSend(&projected_map_, projectOccupancy(tree, config_.occupancy_band, frame), now);
-    sent += " projected_map";
-  }
-  if (!class_costs_.empty() && projected_cost_map_.wanted(force)) {
-    stampAndSend(&projected_cost_map_,
-                 projectClassCosts(tree, config_.occupancy_band, class_costs_,
-                                   static_cast<int8_t>(config_.class_cost_default), frame),
-                 now);
-    sent += " projected_cost_map";
-  }
+  auto timed = [&](const char* name, auto build_and_send) {
+    const auto t = std::chrono::steady_clock::now();
+    build_and_send();
+    std::snprintf(part, sizeof(part), " %s (%.0f ms)", name, msSince(t));
+    sent += part;
+  };
+  if (occupancy_map_.wanted(force))
+    timed("occupancy_map",
+          [&] { stampAndSend(&occupancy_map_, toOccupancyMap(tree, frame), now); });
+  if (projected_map_.wanted(force))
+    timed("projected_map", [&] {
+      stampAndSend(&projected_map_, projectOccupancy(tree, config_.occupancy_band, frame), now);
+    });
+  if (!class_costs_.empty() && projected_cost_map_.wanted(force))
+    timed("projected_cost_map", [&] {
+      stampAndSend(&projected_cost_map_,
+                   projectClassCosts(tree, config_.occupancy_band, class_costs_,
+                                     static_cast<int8_t>(config_.class_cost_default), frame),
+                   now);
+    });
   return sent;
 }
 

@@ -32,18 +32,25 @@ class OctomapMsgsOutputs : public OctomapMsgsInterface {
                       bool force) override {
     std::string sent;
     const ros::Time now = ros::Time::now();
-    auto send = [&](StaleOutput* output, octomap_msgs::Octomap msg, const char* name) {
+    // Builds (timed) and sends one message.
+    auto send = [&](StaleOutput* output, const char* name, auto build) {
+      const auto t0 = std::chrono::steady_clock::now();
+      octomap_msgs::Octomap msg = build();
       msg.header.stamp = now;
       output->send(msg);
-      char part[64];
-      std::snprintf(part, sizeof(part), " %s (%.1f MB)", name, msg.data.size() / 1e6);
+      const double ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      char part[80];
+      std::snprintf(part, sizeof(part), " %s (%.1f MB, %.0f ms)", name, msg.data.size() / 1e6, ms);
       sent += part;
     };
+    const std::string& frame = config_.frame_id;
     if (binary_.wanted(force))
-      send(&binary_, toOctomapBinary(tree, config_.frame_id), "octomap_binary");
-    if (full_.wanted(force)) send(&full_, full(tree, classes), "octomap_full");
+      send(&binary_, "octomap_binary", [&] { return toOctomapBinary(tree, frame); });
+    if (full_.wanted(force)) send(&full_, "octomap_full", [&] { return full(tree, classes); });
     if (evidential_.wanted(force))
-      send(&evidential_, toOctomapEvidential(tree, config_.frame_id), "evidential_octomap_full");
+      send(&evidential_, "evidential_octomap_full",
+           [&] { return toOctomapEvidential(tree, frame); });
     return sent;
   }
 

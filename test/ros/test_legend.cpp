@@ -22,20 +22,23 @@ TEST(Legend, OneSwatchPerClassInItsColour) {
   ASSERT_EQ(image.type(), CV_8UC3);
   EXPECT_EQ(image.cols, L::kWidth);
   EXPECT_EQ(image.rows, L::height(4));
-  const int x = L::kMargin + L::kSwatch / 2;
-  for (int c = 0; c < 4; ++c)
-    EXPECT_EQ(pixel(image, x, L::swatchTop(c) + L::kSwatch / 2), rgb(classes.colors[c]))
-        << "class " << c;
-  EXPECT_EQ(pixel(image, x, L::swatchTop(4) + L::kSwatch / 2), cv::Vec3b(128, 128, 128));
+  auto centre = [&](int i) {
+    return pixel(image, L::swatchLeft(i, 4) + L::kSwatch / 2, L::swatchTop(i, 4) + L::kSwatch / 2);
+  };
+  for (int c = 0; c < 4; ++c) EXPECT_EQ(centre(c), rgb(classes.colors[c])) << "class " << c;
+  EXPECT_EQ(centre(4), cv::Vec3b(128, 128, 128));  // no evidence
+  // Two columns: class 3 sits in the right one.
+  EXPECT_GT(L::swatchLeft(3, 4), L::kWidth / 2);
 }
 
 TEST(Legend, ColourBarsRunAlongTheColourRamp) {
   const cv::Mat image = renderLegend(ros_test::fourClasses(), UncertaintyRange(), "u");
-  for (int top : {L::uncertaintyBarTop(4), L::conflictBarTop(4)}) {
-    const int y = top + L::kBarHeight / 2;
-    EXPECT_EQ(pixel(image, L::kMargin, y), rgb(uncertaintyColor(0.0)));
-    EXPECT_EQ(pixel(image, L::kMargin + L::kBarWidth - 1, y), rgb(uncertaintyColor(1.0)));
-    EXPECT_EQ(pixel(image, L::kMargin + (L::kBarWidth - 1) / 2, y),
+  const int y = L::barTop(4) + L::kBarHeight / 2;
+  for (int bar : {0, 1}) {
+    const int left = L::barLeft(bar);
+    EXPECT_EQ(pixel(image, left, y), rgb(uncertaintyColor(0.0)));
+    EXPECT_EQ(pixel(image, left + L::kBarWidth - 1, y), rgb(uncertaintyColor(1.0)));
+    EXPECT_EQ(pixel(image, left + (L::kBarWidth - 1) / 2, y),
               rgb(uncertaintyColor(double((L::kBarWidth - 1) / 2) / (L::kBarWidth - 1))));
   }
 }
@@ -48,7 +51,8 @@ TEST(Legend, GrowsWithTheClassTable) {
   }
   const cv::Mat image = renderLegend(many, UncertaintyRange(), "u");
   EXPECT_EQ(image.rows, L::height(20));
-  EXPECT_EQ(pixel(image, L::kMargin + 2, L::swatchTop(19) + 2), rgb(many.colors[19]));
+  EXPECT_EQ(pixel(image, L::swatchLeft(19, 20) + 2, L::swatchTop(19, 20) + 2),
+            rgb(many.colors[19]));
 }
 
 int main(int argc, char** argv) {
