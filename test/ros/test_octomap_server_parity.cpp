@@ -31,15 +31,10 @@
 #endif
 
 namespace eo = evidential_octomap;
-using node_test::gp;
-using node_test::waitFor;
+using namespace node_test;
 
 namespace {
 
-constexpr int kC = 20;
-constexpr int kRoad = 9;
-constexpr int kBuilding = 13;
-const std::string kNode = "/evidential_mapping_node";
 
 // Parameters of octomap_server_parity.test.
 constexpr double kOccupancyMaxZ = 1.0, kOccupancyMinZ = -2.0;
@@ -71,7 +66,7 @@ class ParityTest : public ::testing::Test {
     for (float x = 1.f; x <= 2.f; x += 0.05f)
       for (float y = -1.f; y <= 1.f; y += 0.05f) pts.push_back({x, y, -1.6f, kRoad});
     const uint64_t before = status_->clouds_inserted;
-    cloud_pub_.publish(node_test::cloudOf(pts, "lidar", kC));
+    cloud_pub_.publish(node_test::cloudOf(pts, "lidar", kClasses));
     ASSERT_TRUE(waitFor([&] { return status_->clouds_inserted > before; }));
   }
 
