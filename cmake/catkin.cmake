@@ -4,15 +4,30 @@
 
 set(EVIDENTIAL_OCTOMAP_CATKIN_COMPONENTS
   roscpp roslib std_msgs std_srvs sensor_msgs geometry_msgs visualization_msgs diagnostic_msgs
+  nav_msgs
   tf2 tf2_ros message_filters cv_bridge dynamic_reconfigure nodelet pluginlib)
 
 find_package(catkin REQUIRED COMPONENTS message_generation ${EVIDENTIAL_OCTOMAP_CATKIN_COMPONENTS})
+
+# octomap_msgs is optional: ROS distributions ship it (ros-<distro>-octomap-msgs), Debian does
+# not. Found -> the node has octomap_server's octomap_binary / octomap_full topics and services;
+# absent -> they are left out (the node says so at start-up), never a build failure.
+find_package(octomap_msgs QUIET)
+if(octomap_msgs_FOUND)
+  message(STATUS "evidential_octomap: octomap_msgs found (${octomap_msgs_DIR}): "
+    "octomap_binary / octomap_full topics and services are built")
+else()
+  message(STATUS "evidential_octomap: octomap_msgs not found: building without the "
+    "octomap_binary / octomap_full topics and services (install your distribution's "
+    "octomap_msgs, or put the package in the workspace, to get them)")
+endif()
 
 add_message_files(DIRECTORY msg FILES
   EvidentialMap.msg
   MappingStatus.msg
   OccupancyMap.msg)
 add_service_files(DIRECTORY srv FILES
+  BoundingBoxQuery.srv
   ClearBbx.srv
   LoadMap.srv
   QueryMap.srv

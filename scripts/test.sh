@@ -153,6 +153,20 @@ else
   note "catkin: workspace ${ws}"
   mkdir -p "${ws}/src"
   ln -sfn "${root}" "${ws}/src/evidential_octomap"
+  # octomap_msgs is optional (Debian ships none): the unchanged upstream copy beside the
+  # repository (../shared/vendor, as CI has it) joins the workspace when it exists; without it
+  # the node is built without octomap_server's octomap_binary / octomap_full interface.
+  vendor_msgs="${root}/../shared/vendor/octomap_msgs"
+  if [[ -f "${vendor_msgs}/package.xml" ]]; then
+    ln -sfn "$(cd "${vendor_msgs}" && pwd)" "${ws}/src/octomap_msgs"
+    echo "test.sh: octomap_msgs from ${vendor_msgs}"
+  elif [[ -L "${ws}/src/octomap_msgs" ]]; then
+    # Gone since the last build: its devel-space config would still be found, pointing nowhere.
+    rm -rf "${ws}/src/octomap_msgs" "${ws}/build/octomap_msgs" "${ws}/devel/share/octomap_msgs" \
+      "${ws}/devel/include/octomap_msgs" "${ws}/devel/lib/python3/dist-packages/octomap_msgs"
+  fi
+  [[ -e "${ws}/src/octomap_msgs" ]] ||
+    echo "test.sh: no ${vendor_msgs}: building without octomap_msgs (its tests are skipped)"
   # A workspace that holds this repository must not find a second copy through build/.
   touch build/CATKIN_IGNORE build/COLCON_IGNORE
   # ROS writes logs and test results under ROS_HOME; keep them in build/, away from ~/.ros.

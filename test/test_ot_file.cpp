@@ -327,6 +327,41 @@ TEST(BtFile, LoadMapRefusesABtFileNamingThePath) {
   }
 }
 
+TEST(BtFile, LoadsIntoAnOccupancyOnlyMapToMapOn) {
+  TempDir dir;
+  auto tree = makeMap("dempster");
+  const std::string path = dir.file("map.bt");
+  saveBinaryOccupancy(*tree, path);
+  SemanticConfig config;
+  auto loaded = loadBinaryOccupancy(path, 5, config);
+  EXPECT_DOUBLE_EQ(loaded->getResolution(), tree->getResolution());
+  EXPECT_EQ(loaded->numClasses(), 5);
+  EXPECT_EQ(loaded->numSemanticNodes(), 0u);
+  const auto expected = occupiedLeafKeys(*tree);
+  ASSERT_GT(expected.size(), 100u);
+  EXPECT_TRUE(occupiedLeafKeys(*loaded) == expected);
+  // A semantic scan on top of it works as on any map.
+  SyntheticScene scene;
+  const auto scan = scene.scan(octomap::point3d(0.05f, 0.1f, 1.7f), 3);
+  std::vector<float> evidence;
+  for (size_t i = 0; i < scan.points_W.size(); ++i)
+    for (int c = 0; c < 5; ++c) evidence.push_back(c == 1 ? 5.f : 0.f);
+  loaded->insertSemanticScan(scan.points_W, evidence, scan.origin_W);
+  EXPECT_GT(loaded->numSemanticNodes(), 0u);
+}
+
+TEST(BtFile, LoadBinaryOccupancyRefusesAnOtNamingThePath) {
+  TempDir dir;
+  const std::string path = dir.file("map.ot");
+  saveMap(*makeMap("dempster", 1), path);
+  try {
+    loadBinaryOccupancy(path, 3, SemanticConfig());
+    FAIL() << "an .ot file was read as a .bt";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
 TEST(BtFile, HeaderNamesThePlainOcTreeForStockTools) {
   TempDir dir;
   const std::string path = dir.file("map.bt");

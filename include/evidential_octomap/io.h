@@ -34,6 +34,13 @@ void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path);
 // OcTree's, so stock tools must not read or echo our own type id), then writeBinaryData.
 bool writeBinaryOccupancy(const EvidentialOcTree& tree, std::ostream& s);
 
+// An occupancy-only map from an OctoMap binary file (.bt: octomap_server's saved maps, or
+// saveBinaryOccupancy's): every leaf's occupancy (the file's max-likelihood values), no evidence,
+// in a tree of the file's resolution with `num_classes` and `config`, so mapping can go on from
+// it. Throws std::runtime_error for a missing path or a file that is not an OctoMap .bt.
+std::unique_ptr<EvidentialOcTree> loadBinaryOccupancy(const std::string& path, int num_classes,
+                                                      const SemanticConfig& config);
+
 // Reads an .ot written by saveMap: the safe way to load a map. Throws std::runtime_error for a
 // missing path, anything but a regular file (FIFO, device, directory: nothing is read), a file
 // larger than `max_bytes` (0: no limit), a file that is not an OctoMap file, a file of another

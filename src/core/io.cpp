@@ -28,15 +28,30 @@ void saveMap(const EvidentialOcTree& tree, const std::string& path) {
 }
 
 namespace {
-// OctoMap's first line of a .bt file (protected in AbstractOccupancyOcTree).
-struct BtHeader : octomap::AbstractOccupancyOcTree {
-  static const std::string& firstLine() { return binaryFileHeader; }
+// OctoMap's own file headers: first lines and the header parser are protected in
+// AbstractOcTree / AbstractOccupancyOcTree, so they are reached through a subclass.
+struct OctomapHeader : octomap::AbstractOccupancyOcTree {
+  static const std::string& btFirstLine() { return binaryFileHeader; }
+  // Reads a first line starting with `first_line`, then the header up to "data".
+  static bool read(std::istream& s, const std::string& first_line, std::string& id,
+                   unsigned& size, double& res) {
+    std::string line;
+    std::getline(s, line);
+    if (line.compare(0, first_line.length(), first_line) != 0) return false;
+    return readHeader(s, id, size, res);
+  }
+  static bool readOt(std::istream& s, std::string& id, unsigned& size, double& res) {
+    return read(s, fileHeader, id, size, res);
+  }
+  static bool readBt(std::istream& s, std::string& id, unsigned& size, double& res) {
+    return read(s, binaryFileHeader, id, size, res);
+  }
 };
 }  // namespace
 
 bool writeBinaryOccupancy(const EvidentialOcTree& tree, std::ostream& s) {
   // As AbstractOccupancyOcTree::writeBinaryConst, but under the plain OcTree's id.
-  s << BtHeader::firstLine() << "\n"
+  s << OctomapHeader::btFirstLine() << "\n"
     << "# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
     << "id OcTree\n"
     << "size " << tree.size() << "\n"
@@ -50,20 +65,9 @@ void saveBinaryOccupancy(const EvidentialOcTree& tree, const std::string& path) 
 }
 
 namespace {
-// OctoMap's own .ot header parser (protected in AbstractOcTree, reached through a subclass).
-struct OtHeader : octomap::AbstractOcTree {
-  static bool read(std::istream& s, std::string& id, unsigned& size, double& res) {
-    std::string line;
-    std::getline(s, line);
-    if (line.compare(0, fileHeader.length(), fileHeader) != 0) return false;
-    return readHeader(s, id, size, res);
-  }
-};
-}  // namespace
-
-std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path, uint64_t max_bytes) {
-  // Checked before opening: opening a FIFO blocks until a writer appears, and a device such as
-  // /dev/zero never ends.
+// Opens a regular file for reading, checked before opening: opening a FIFO blocks until a writer
+// appears, and a device such as /dev/zero never ends. max_bytes 0: no size limit.
+std::ifstream openRegularFile(const std::string& path, uint64_t max_bytes) {
   struct stat info;
   if (::stat(path.c_str(), &info) != 0) {
     throw std::runtime_error("cannot open " + path + ": " + std::strerror(errno));
@@ -77,6 +81,34 @@ std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path, uint64_t max_
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open " + path + ": " + std::strerror(errno));
+  return in;
+}
+}  // namespace
+
+std::unique_ptr<EvidentialOcTree> loadBinaryOccupancy(const std::string& path, int num_classes,
+                                                      const SemanticConfig& config) {
+  std::ifstream in = openRegularFile(path, 0);
+  std::string id;
+  unsigned size = 0;
+  double res = 0.0;
+  if (!OctomapHeader::readBt(in, id, size, res)) {
+    throw std::runtime_error(path + " is not an OctoMap binary (.bt) file");
+  }
+  if (!std::isfinite(res) || !(res > 0.0)) {
+    throw std::runtime_error(path + ": resolution " + std::to_string(res) + " is not > 0");
+  }
+  // Every occupancy tree (OcTree, ColorOcTree, ours) writes the same binary data.
+  auto tree = std::make_unique<EvidentialOcTree>(res, num_classes, config);
+  if (size > 0) {
+    tree->readBinaryData(in);
+    if (in.fail()) throw std::runtime_error(path + ": truncated or corrupt data");
+    tree->updateInnerNodes();
+  }
+  return tree;
+}
+
+std::unique_ptr<EvidentialOcTree> loadMap(const std::string& path, uint64_t max_bytes) {
+  std::ifstream in = openRegularFile(path, max_bytes);
   return loadMap(in, path);
 }
 
@@ -87,7 +119,7 @@ std::unique_ptr<EvidentialOcTree> loadMap(std::istream& in, const std::string& p
   std::string id;
   unsigned size = 0;
   double res = 0.0;
-  if (!OtHeader::read(in, id, size, res)) {
+  if (!OctomapHeader::readOt(in, id, size, res)) {
     throw std::runtime_error(path + " is not a readable OctoMap .ot file");
   }
   if (id != "EvidentialOcTree") {

@@ -6,6 +6,8 @@
 #include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -69,6 +71,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
                                 std::to_string(classes_.numClasses()) + " classes)");
   config_.num_classes = classes_.numClasses();
   tree_ = makeTree();
+  if (!config_.map_file.empty()) loadStartupMap();
   {
     std::ostringstream s;
     semantic_config_.print(s);
@@ -80,7 +83,11 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
                     << s.str());
   }
 
-  outputs_ = std::make_unique<MapOutputs>(nh_, config_);
+  outputs_ = std::make_unique<MapOutputs>(nh_, pnh_, config_, classes_,
+                                          [this](const OctomapMsgsInterface::MapVisitor& visit) {
+                                            std::lock_guard<std::mutex> lock(mutex_);
+                                            visit(*tree_, classes_);
+                                          });
   status_pub_ = pnh_.advertise<MappingStatus>("status", 1, true);
   diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 1);
   status_.queue_capacity = static_cast<uint32_t>(config_.insert_queue_size);
@@ -95,6 +102,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   files_spinner_->start();
   reset_srv_ = pnh_.advertiseService("reset", &MappingServer::reset, this);
   clear_srv_ = pnh_.advertiseService("clear_bbx", &MappingServer::clearBbx, this);
+  clear_box_srv_ = pnh_.advertiseService("clear_box", &MappingServer::clearBox, this);
   query_srv_ = pnh_.advertiseService("query", &MappingServer::query, this);
 
   // Run-time parameters: push the values in use, then listen.
@@ -133,6 +141,8 @@ void MappingServer::subscribeInputs() {
   cloud_sub_.subscribe(intake_nh, "cloud_in", 20);
   tf_filter_ = std::make_unique<tf2_ros::MessageFilter<sensor_msgs::PointCloud2>>(
       cloud_sub_, tf_buffer_, config_.frame_id, config_.queue_size, intake_nh);
+  if (!config_.base_frame_id.empty() && config_.base_frame_id != config_.frame_id)
+    tf_filter_->setTargetFrames({config_.frame_id, config_.base_frame_id});
   tf_filter_->registerCallback(
       boost::bind(&MappingServer::cloudCallback, this, boost::placeholders::_1));
   tf_filter_->registerFailureCallback(boost::bind(
@@ -183,6 +193,10 @@ void MappingServer::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& cloud)
   try {
     pending.T_W_S =
         tf_buffer_.lookupTransform(config_.frame_id, cloud->header.frame_id, cloud->header.stamp);
+    pending.T_F_S = pending.T_W_S;  // pointcloud_min_z/max_z apply in base_frame_id, else map
+    if (!config_.base_frame_id.empty() && !config_.pointcloud_band.unbounded())
+      pending.T_F_S = tf_buffer_.lookupTransform(config_.base_frame_id, cloud->header.frame_id,
+                                                 cloud->header.stamp);
   } catch (const tf2::TransformException& e) {
     {
       std::lock_guard<std::mutex> lock(status_mutex_);
@@ -249,6 +263,11 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
   SemanticCloud scan;
   std::string error = fromPointCloud2(cloud, options, &scan);
   if (error.empty() && config_.use_camera) error = paintFromCamera(cloud, &scan);
+  if (error.empty() &&
+      keepHeightBand(toPose(pending.T_F_S.transform), config_.pointcloud_band, tree_->numClasses(),
+                     &scan) > 0 &&
+      scan.points_S.size() == 0)
+    error = "no point within pointcloud_min_z .. pointcloud_max_z";
   if (!error.empty()) {
     {
       std::lock_guard<std::mutex> status_lock(status_mutex_);
@@ -416,10 +435,70 @@ void MappingServer::statusTimer(const ros::TimerEvent&) {
 
 // --- services ---------------------------------------------------------------------------
 
+std::string MappingServer::absolutePath(const std::string& path) {
+  std::error_code ec;
+  const std::filesystem::path absolute = std::filesystem::absolute(path, ec);
+  return ec ? path : absolute.lexically_normal().string();
+}
+
+// Our .ot, or (first line "# Octomap OcTree binary file") a .bt whose occupancy the map takes.
+// Reads no node state but the constant config, so it runs without the map lock.
+std::unique_ptr<EvidentialOcTree> MappingServer::readMapFile(const std::string& path,
+                                                             bool* occupancy_only) const {
+  std::string first_line;
+  if (std::filesystem::is_regular_file(path)) {  // never open a FIFO or a device to sniff it
+    std::ifstream in(path, std::ios::binary);
+    std::getline(in, first_line);
+  }
+  *occupancy_only = first_line.rfind("# Octomap OcTree binary file", 0) == 0;
+  std::unique_ptr<EvidentialOcTree> tree;
+  if (*occupancy_only) {
+    tree = loadBinaryOccupancy(path, config_.num_classes, semantic_config_);
+    tree->setClassNames(classes_.names);
+  } else {
+    const uint64_t limit =
+        config_.load_map_max_mb > 0.0 ? uint64_t(config_.load_map_max_mb * 1e6) : 0;
+    tree = evidential_octomap::loadMap(path, limit);
+  }
+  if (tree->numClasses() != config_.num_classes)
+    throw std::runtime_error(path + " has C = " + std::to_string(tree->numClasses()) +
+                             ", this node maps C = " + std::to_string(config_.num_classes));
+  return tree;
+}
+
+// A map read from a .bt has only occupancy: it takes the sensor model in use (map mutex held).
+void MappingServer::adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupancy_only) {
+  if (occupancy_only && tree_) map->setSensorModel(tree_->sensorModel());
+  tree_ = std::move(map);
+  semantic_config_ = tree_->config();
+}
+
+void MappingServer::loadStartupMap() {
+  const std::string path = absolutePath(config_.map_file);
+  bool occupancy_only = false;
+  try {
+    adoptMap(readMapFile(path, &occupancy_only), occupancy_only);
+  } catch (const std::exception& e) {
+    throw std::runtime_error("~map_file: " + std::string(e.what()));
+  }
+  if (tree_->getResolution() != config_.resolution) {
+    ROS_WARN("~map_file %s has resolution %g m; the node maps at it (not ~resolution %g m)",
+             path.c_str(), tree_->getResolution(), config_.resolution);
+    config_.resolution = tree_->getResolution();
+  }
+  ROS_INFO("~map_file: loaded %zu leaves (%zu semantic) from %s", tree_->getNumLeafNodes(),
+           tree_->numSemanticNodes(), path.c_str());
+}
+
 bool MappingServer::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
+  res.path = absolutePath(req.path);
+  const bool occupancy_only = res.path.size() > 3 && res.path.substr(res.path.size() - 3) == ".bt";
   try {
-    evidential_octomap::saveMap(*tree_, req.path);
+    if (occupancy_only)
+      saveBinaryOccupancy(*tree_, res.path);
+    else
+      evidential_octomap::saveMap(*tree_, res.path);
   } catch (const std::exception& e) {
     res.success = false;
     res.message = e.what();
@@ -428,18 +507,21 @@ bool MappingServer::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   }
   res.success = true;
   res.message = "saved " + std::to_string(tree_->getNumLeafNodes()) + " leaves (" +
-                std::to_string(tree_->numSemanticNodes()) + " semantic) to " + req.path;
+                (occupancy_only ? std::string("occupancy only, .bt")
+                                : std::to_string(tree_->numSemanticNodes()) + " semantic") +
+                ") to " + res.path;
   ROS_INFO("save_map: %s", res.message.c_str());
   return true;
 }
 
 bool MappingServer::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
-  // Parsed without the map lock: mapping and queries go on while a large file loads. loadMap
-  // reads regular files only (a FIFO would block, /dev/zero never end) up to the size limit.
+  // Parsed without the map lock: mapping and queries go on while a large file loads. Files are
+  // read only when regular (a FIFO would block, /dev/zero never end) and up to the size limit.
+  const std::string path = absolutePath(req.path);
   std::unique_ptr<EvidentialOcTree> loaded;
+  bool occupancy_only = false;
   try {
-    const uint64_t limit = config_.load_map_max_mb > 0.0 ? uint64_t(config_.load_map_max_mb * 1e6) : 0;
-    loaded = evidential_octomap::loadMap(req.path, limit);
+    loaded = readMapFile(path, &occupancy_only);
   } catch (const std::exception& e) {
     res.success = false;
     res.message = e.what();
@@ -447,17 +529,9 @@ bool MappingServer::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
     return true;
   }
   std::lock_guard<std::mutex> lock(mutex_);
-  if (loaded->numClasses() != tree_->numClasses()) {
-    res.success = false;
-    res.message = req.path + " has C = " + std::to_string(loaded->numClasses()) +
-                  ", this node maps C = " + std::to_string(tree_->numClasses());
-    ROS_ERROR("load_map: %s (map unchanged)", res.message.c_str());
-    return true;
-  }
-  tree_ = std::move(loaded);
-  semantic_config_ = tree_->config();
+  adoptMap(std::move(loaded), occupancy_only);
   res.success = true;
-  res.message = "loaded " + std::to_string(tree_->getNumLeafNodes()) + " leaves from " + req.path;
+  res.message = "loaded " + std::to_string(tree_->getNumLeafNodes()) + " leaves from " + path;
   ROS_INFO("load_map: %s", res.message.c_str());
   recordMapSize();
   outputs_->markStale();
@@ -486,7 +560,7 @@ bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   return true;
 }
 
-bool MappingServer::clearBbx(ClearBbx::Request& req, ClearBbx::Response& res) {
+bool MappingServer::clearBox(ClearBbx::Request& req, ClearBbx::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
   clearBoxRequest(tree_.get(), req, &res);
   if (!res.success) {
@@ -499,6 +573,16 @@ bool MappingServer::clearBbx(ClearBbx::Request& req, ClearBbx::Response& res) {
   outputs_->markStale();
   publishMap(true);
   return true;
+}
+
+// octomap_server's ~clear_bbx: its reply is empty, so a refused box fails the call (and is
+// logged with the reason); ~clear_box replies with the count and the reason.
+bool MappingServer::clearBbx(BoundingBoxQuery::Request& req, BoundingBoxQuery::Response&) {
+  ClearBbx::Request box;
+  box.min = req.min;
+  box.max = req.max;
+  ClearBbx::Response res;
+  return clearBox(box, res) && res.success;
 }
 
 bool MappingServer::query(QueryMap::Request& req, QueryMap::Response& res) {

@@ -32,6 +32,7 @@
 #include <string>
 #include <thread>
 
+#include "evidential_octomap/BoundingBoxQuery.h"
 #include "evidential_octomap/ClearBbx.h"
 #include "evidential_octomap/LoadMap.h"
 #include "evidential_octomap/MappingConfig.h"
@@ -59,6 +60,7 @@ class MappingServer {
   struct PendingCloud {
     sensor_msgs::PointCloud2ConstPtr cloud;
     geometry_msgs::TransformStamped T_W_S;
+    geometry_msgs::TransformStamped T_F_S;  // into the frame of pointcloud_min_z/max_z
   };
 
   // --- input (reception thread) ---------------------------------------------------------
@@ -87,12 +89,23 @@ class MappingServer {
   bool saveMap(SaveMap::Request& req, SaveMap::Response& res);
   bool loadMap(LoadMap::Request& req, LoadMap::Response& res);
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
-  bool clearBbx(ClearBbx::Request& req, ClearBbx::Response& res);
+  bool clearBox(ClearBbx::Request& req, ClearBbx::Response& res);
+  bool clearBbx(BoundingBoxQuery::Request& req, BoundingBoxQuery::Response& res);
   bool query(QueryMap::Request& req, QueryMap::Response& res);
   void reconfigure(MappingConfig& config, uint32_t level);
 
   // A fresh, empty tree from the current parameters.
   std::unique_ptr<EvidentialOcTree> makeTree();
+  // ~map_file at start-up (as octomap_server's map file argument): our .ot, or a .bt whose
+  // occupancy the map starts from. Throws when it cannot be loaded.
+  void loadStartupMap();
+  // Our .ot (same C) or an occupancy .bt, as a map with this node's classes; throws.
+  std::unique_ptr<EvidentialOcTree> readMapFile(const std::string& path,
+                                                bool* occupancy_only) const;
+  // Makes `map` the node's map (map mutex held).
+  void adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupancy_only);
+  // A service's path: relative paths are taken from the node's working directory.
+  static std::string absolutePath(const std::string& path);
   // Map size into status_ (map mutex held).
   void recordMapSize();
 
@@ -128,7 +141,7 @@ class MappingServer {
 
   std::unique_ptr<MapOutputs> outputs_;
   ros::Publisher status_pub_, diagnostics_pub_;
-  ros::ServiceServer save_srv_, load_srv_, reset_srv_, clear_srv_, query_srv_;
+  ros::ServiceServer save_srv_, load_srv_, reset_srv_, clear_srv_, clear_box_srv_, query_srv_;
   ros::Timer publish_timer_, status_timer_;
   std::unique_ptr<dynamic_reconfigure::Server<MappingConfig>> reconfigure_server_;
   boost::recursive_mutex reconfigure_mutex_;

@@ -337,19 +337,24 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
   return "";
 }
 
-std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& box) {
+namespace {
+
+// Leaves that are occupied (or free), inside `box` unless it is empty, centre in `band`.
+std::vector<VoxelView> collectLeaves(const EvidentialOcTree& tree, const Box& box,
+                                     const HeightBand& band, bool occupied) {
   std::vector<VoxelView> voxels;
   auto add = [&](const EvidentialOcTreeNode& node, const octomap::point3d& center, double size,
                  unsigned depth) {
-    if (!tree.isNodeOccupied(node)) return;
+    if (tree.isNodeOccupied(node) != occupied || !band.contains(center.z())) return;
     VoxelView v;
     v.center = center;
     v.size = size;
     v.depth = depth;
-    if (node.hasSemantics()) {
+    if (occupied && node.hasSemantics()) {
       const VoxelOpinion o = tree.opinion(&node);
       v.label = o.label;
       v.uncertainty = o.uncertainty;
+      v.conflict = o.conflict;
     }
     voxels.push_back(v);
   };
@@ -363,6 +368,36 @@ std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& b
       add(*it, it.getCoordinate(), it.getSize(), it.getDepth());
   }
   return voxels;
+}
+
+}  // namespace
+
+std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& box,
+                                      const HeightBand& band) {
+  return collectLeaves(tree, box, band, true);
+}
+
+std::vector<VoxelView> freeVoxels(const EvidentialOcTree& tree, const Box& box,
+                                  const HeightBand& band) {
+  return collectLeaves(tree, box, band, false);
+}
+
+size_t keepHeightBand(const octomap::pose6d& T_F_S, const HeightBand& band, int num_classes,
+                      SemanticCloud* scan) {
+  if (band.unbounded()) return 0;
+  octomap::Pointcloud kept;
+  std::vector<float> evidence;
+  const size_t n = scan->points_S.size();
+  for (size_t i = 0; i < n; ++i) {
+    const octomap::point3d& p = scan->points_S[i];
+    if (!band.contains(T_F_S.transform(p).z())) continue;
+    kept.push_back(p);
+    evidence.insert(evidence.end(), scan->evidence.begin() + i * num_classes,
+                    scan->evidence.begin() + (i + 1) * num_classes);
+  }
+  scan->points_S = kept;
+  scan->evidence.swap(evidence);
+  return n - kept.size();
 }
 
 EvidentialMap toEvidentialMap(const EvidentialOcTree& tree, const std::string& frame_id) {
@@ -401,10 +436,11 @@ sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
                                        const ClassTable& classes, const std::string& frame_id) {
   sensor_msgs::PointCloud2 msg;
   msg.header.frame_id = frame_id;
-  const char* names[6] = {"x", "y", "z", "label", "uncertainty", "rgb"};
-  const uint8_t types[6] = {PointField::FLOAT32, PointField::FLOAT32, PointField::FLOAT32,
-                            PointField::INT32,   PointField::FLOAT32, PointField::FLOAT32};
-  for (int i = 0; i < 6; ++i) {
+  const char* names[7] = {"x", "y", "z", "label", "uncertainty", "rgb", "conflict"};
+  const uint8_t types[7] = {PointField::FLOAT32, PointField::FLOAT32, PointField::FLOAT32,
+                            PointField::INT32,   PointField::FLOAT32, PointField::FLOAT32,
+                            PointField::FLOAT32};
+  for (int i = 0; i < 7; ++i) {
     PointField f;
     f.name = names[i];
     f.offset = 4 * i;
@@ -412,7 +448,7 @@ sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
     f.count = 1;
     msg.fields.push_back(f);
   }
-  msg.point_step = 24;
+  msg.point_step = 28;
   msg.height = 1;
   msg.width = static_cast<uint32_t>(voxels.size());
   msg.row_step = msg.point_step * msg.width;
@@ -430,6 +466,7 @@ sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
     std::memcpy(p + 12, &label, 4);
     std::memcpy(p + 16, &v.uncertainty, 4);
     std::memcpy(p + 20, &rgb, 4);
+    std::memcpy(p + 24, &v.conflict, 4);
     p += msg.point_step;
   }
   return msg;

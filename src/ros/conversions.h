@@ -3,11 +3,14 @@
 //   EvidentialOcTree                     ->  voxel list  ->  PointCloud2 (label, uncertainty, rgb).
 #pragma once
 
+#include <octomap/Pointcloud.h>
+#include <octomap/math/Pose6D.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
-
-#include <octomap/Pointcloud.h>
-#include <sensor_msgs/PointCloud2.h>
 
 #include "evidential_octomap/EvidentialMap.h"
 #include "evidential_octomap/OccupancyMap.h"
@@ -46,9 +49,9 @@ struct CloudReadOptions {
 // A cloud read from a message: points in the message's frame and their N x C evidence.
 struct SemanticCloud {
   octomap::Pointcloud points_S;
-  std::vector<float> evidence;   // row-major, points_S.size() x C
-  size_t nonfinite_points = 0;   // dropped for NaN/inf coordinates (organised clouds)
-  std::string source;            // which field was read, e.g. "evidence[20]", "label"
+  std::vector<float> evidence;  // row-major, points_S.size() x C
+  size_t nonfinite_points = 0;  // dropped for NaN/inf coordinates (organised clouds)
+  std::string source;           // which field was read, e.g. "evidence[20]", "label"
 };
 
 // Reads x, y, z and the evidence by field name and offset, for any point_step, row_step,
@@ -58,13 +61,14 @@ struct SemanticCloud {
 std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudReadOptions& options,
                             SemanticCloud* out);
 
-// One occupied leaf as drawn and published.
+// One leaf as drawn and published.
 struct VoxelView {
   octomap::point3d center;
-  double size = 0.0;        // edge length [m]
-  unsigned depth = 0;       // tree depth of the leaf
-  int label = -1;           // argmax class, -1: no semantic evidence
+  double size = 0.0;   // edge length [m]
+  unsigned depth = 0;  // tree depth of the leaf
+  int label = -1;      // argmax class, -1: no semantic evidence
   float uncertainty = 1.0f;
+  float conflict = 0.0f;  // VoxelOpinion::conflict
 };
 
 // Axis-aligned box in the map frame; empty (min > max) means "everything".
@@ -74,11 +78,29 @@ struct Box {
   bool empty() const { return min.x() > max.x(); }
 };
 
-// Every occupied leaf of `tree` (inside `box` unless the box is empty).
-std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& box = Box());
+// A z interval [m] (octomap_server's pointcloud_min_z/max_z, occupancy_min_z/max_z); unbounded
+// by default.
+struct HeightBand {
+  double min_z = -std::numeric_limits<double>::infinity();
+  double max_z = std::numeric_limits<double>::infinity();
+  bool contains(double z) const { return z >= min_z && z <= max_z; }
+  bool unbounded() const { return std::isinf(min_z) && std::isinf(max_z); }
+};
+
+// Every occupied (free) leaf of `tree` inside `box` (unless the box is empty) whose centre lies
+// in `band`; free leaves carry no semantics.
+std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& box = Box(),
+                                      const HeightBand& band = HeightBand());
+std::vector<VoxelView> freeVoxels(const EvidentialOcTree& tree, const Box& box = Box(),
+                                  const HeightBand& band = HeightBand());
+
+// Keeps the points of `scan` whose height in frame F lies in `band`, with their evidence rows;
+// T_F_S maps the cloud's frame into F. Returns how many points were removed.
+size_t keepHeightBand(const octomap::pose6d& T_F_S, const HeightBand& band, int num_classes,
+                      SemanticCloud* scan);
 
 // Voxel centres as PointCloud2: x, y, z (float32), label (int32), uncertainty (float32),
-// rgb (float32-packed class colour, grey when unlabelled).
+// rgb (float32-packed class colour, grey when unlabelled), conflict (float32).
 sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
                                        const ClassTable& classes, const std::string& frame_id);
 

@@ -1,6 +1,7 @@
 // evidential_mapping_node: fuses per-point semantic evidence from cloud_in into an
 // EvidentialOcTree and serves it (see docs/ros.md).
 #include <cstdio>
+#include <string>
 
 #include <ros/ros.h>
 
@@ -11,6 +12,8 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "evidential_mapping_node");
   ros::NodeHandle nh;
   ros::NodeHandle nh_private("~");
+  // As octomap_server_node: a map file as the one argument (ros::init removed the remappings).
+  if (argc == 2) nh_private.setParam("map_file", std::string(argv[1]));
   try {
     evidential_octomap::MappingServer server(nh, nh_private);
     ros::spin();

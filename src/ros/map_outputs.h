@@ -1,47 +1,58 @@
 // Every topic the node derives from its map. Each output has its own "older than the map" flag
-// and is rebuilt only when that flag is set and the topic has a subscriber, so a subscriber that
-// arrives after mapping ended (rviz ticking a display late, `rostopic echo`) gets a fresh copy at
-// the next publish pass, and an output nobody listens to costs nothing.
+// (StaleOutput) and is rebuilt only when that flag is set and the topic has a subscriber, so a
+// subscriber that arrives after mapping ended (rviz ticking a display late, `rostopic echo`) gets
+// a fresh copy at the next publish pass, and an output nobody listens to costs nothing.
 #pragma once
 
 #include <ros/ros.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "octomap_msgs_interface.h"
 #include "ros_params.h"
+#include "stale_output.h"
 
 namespace evidential_octomap {
 
 class MapOutputs {
  public:
-  // Advertises every output on `nh` (latched unless config.latch is false).
-  MapOutputs(ros::NodeHandle& nh, const NodeConfig& config);
+  // Advertises every output on `nh` (latched unless config.latch is false) and the legend on
+  // `pnh`; `with_map` runs a function on the map under the node's lock (octomap_msgs services).
+  MapOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const NodeConfig& config,
+             const ClassTable& classes, OctomapMsgsInterface::WithMap with_map);
+  ~MapOutputs();
 
   // The map changed: every output is older than it.
   void markStale();
 
   // Sends every output that is stale and has a subscriber; with `force`, every output (used
   // after reset or clear_bbx, so latched copies show the edit). Views are limited to
-  // publish_radius around origin_W. Returns a one-line account for the log, "" if nothing was
-  // sent.
+  // publish_radius around origin_W and to occupancy_min_z..max_z. Returns a one-line account
+  // for the log, "" if nothing was sent.
   std::string publish(const EvidentialOcTree& tree, const ClassTable& classes,
                       const octomap::point3d& origin_W, bool force);
 
  private:
-  struct Output {
-    ros::Publisher publisher;
-    bool stale = true;
-    bool wanted(bool force) const { return stale && (force || publisher.getNumSubscribers() > 0); }
-  };
-  template <typename Message>
-  void send(Output* output, Message* message, const ros::Time& stamp);
+  std::string publishViews(const EvidentialOcTree& tree, const ClassTable& classes,
+                           const octomap::point3d& origin_W, bool force);
+  std::string publishMaps(const EvidentialOcTree& tree, const ClassTable& classes, bool force);
+  void publishLegend(const ClassTable& classes, const UncertaintyRange& range,
+                     const std::string& uncertainty_name);
 
   NodeConfig config_;
-  Output semantic_markers_, uncertainty_markers_, voxel_cloud_, voxel_centers_, evidential_map_,
-      occupancy_map_;
+  std::vector<int8_t> class_costs_;  // per class; empty: no projected_cost_map
+  StaleOutput semantic_markers_, uncertainty_markers_, conflict_markers_, free_markers_,
+      voxel_cloud_, voxel_centers_, evidential_map_, occupancy_map_, projected_map_,
+      projected_cost_map_;
+  ros::Publisher legend_;  // latched image; sent when its range or rule name changes
+  bool legend_sent_ = false;
+  UncertaintyRange legend_range_;
+  std::string legend_name_;
+  std::unique_ptr<OctomapMsgsInterface> octomap_msgs_;  // nullptr: built without octomap_msgs
 };
 
 }  // namespace evidential_octomap

@@ -12,6 +12,7 @@ octomap::point3d toPoint(const geometry_msgs::Point& p) { return octomap::point3
 void answerQuery(const EvidentialOcTree& tree, const QueryMap::Request& req,
                  QueryMap::Response* res) {
   const int C = tree.numClasses();
+  const std::vector<std::string>& names = tree.classNames();
   res->num_classes = static_cast<uint16_t>(C);
   const size_t n = req.points.size();
   res->labels.reserve(n);
@@ -22,7 +23,9 @@ void answerQuery(const EvidentialOcTree& tree, const QueryMap::Request& req,
     const EvidentialOcTreeNode* node = tree.nodeAt(toPoint(p));
     const VoxelOpinion o = tree.opinion(node);
     res->labels.push_back(o.label);
+    res->class_names.push_back(o.label >= 0 && o.label < int(names.size()) ? names[o.label] : "");
     res->uncertainties.push_back(o.uncertainty);
+    res->conflicts.push_back(o.conflict);
     res->occupancy.push_back(node ? static_cast<float>(node->getOccupancy()) : -1.f);
     for (int c = 0; c < C; ++c) res->beliefs.push_back(c < int(o.belief.size()) ? o.belief[c] : 0.f);
   }

@@ -9,7 +9,8 @@
 
 namespace evidential_octomap {
 
-// Per point: label, uncertainty, occupancy (-1: unknown) and beliefs, through the guarded
+// Per point: label and class name (the tree's), uncertainty, conflict, occupancy (-1: unknown)
+// and beliefs, through the guarded
 // EvidentialOcTree::nodeAt (NaN, inf and far-away points are unknown, never undefined).
 void answerQuery(const EvidentialOcTree& tree, const QueryMap::Request& req,
                  QueryMap::Response* res);

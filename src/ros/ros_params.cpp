@@ -10,6 +10,24 @@ std::string defaultClassTablePath() {
   return ros::package::getPath("evidential_octomap") + "/config/classes_semantickitti.yaml";
 }
 
+namespace {
+
+// ~class_costs: a dictionary {class name: cost}; ~class_cost_default for the others.
+void readClassCosts(const ros::NodeHandle& nh, NodeConfig* c) {
+  nh.param("class_cost_default", c->class_cost_default, c->class_cost_default);
+  XmlRpc::XmlRpcValue table;
+  if (!nh.getParam("class_costs", table)) return;
+  if (table.getType() != XmlRpc::XmlRpcValue::TypeStruct)
+    throw std::invalid_argument("~class_costs must be a dictionary {class name: cost 0..100}");
+  for (auto& [name, cost] : table) {
+    if (cost.getType() != XmlRpc::XmlRpcValue::TypeInt)
+      throw std::invalid_argument("~class_costs/" + name + " must be an integer 0..100");
+    c->class_costs.emplace_back(name, static_cast<int>(cost));
+  }
+}
+
+}  // namespace
+
 NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   NodeConfig c;
   nh.param("frame_id", c.frame_id, c.frame_id);
@@ -31,6 +49,14 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("insert_queue_size", c.insert_queue_size, c.insert_queue_size);
   nh.param("latch", c.latch, c.latch);
   nh.param("load_map/max_file_mb", c.load_map_max_mb, c.load_map_max_mb);
+  nh.param("map_file", c.map_file, c.map_file);
+  nh.param("base_frame_id", c.base_frame_id, c.base_frame_id);
+  nh.param("pointcloud_min_z", c.pointcloud_band.min_z, c.pointcloud_band.min_z);
+  nh.param("pointcloud_max_z", c.pointcloud_band.max_z, c.pointcloud_band.max_z);
+  nh.param("occupancy_min_z", c.occupancy_band.min_z, c.occupancy_band.min_z);
+  nh.param("occupancy_max_z", c.occupancy_band.max_z, c.occupancy_band.max_z);
+  nh.param("full_map_colors", c.full_map_colors, c.full_map_colors);
+  readClassCosts(nh, &c);
   nh.param("use_camera", c.use_camera, c.use_camera);
   nh.param("camera/input", c.camera_input, c.camera_input);
   nh.param("camera/keep_outside_image", c.keep_outside_image, c.keep_outside_image);
@@ -38,6 +64,12 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   if (!(c.resolution > 0.0)) throw std::invalid_argument("~resolution must be > 0");
   if (c.label_evidence < 0.0) throw std::invalid_argument("~label_evidence must be >= 0");
   if (c.queue_size < 1) throw std::invalid_argument("~queue_size must be >= 1");
+  if (!(c.pointcloud_band.min_z < c.pointcloud_band.max_z))
+    throw std::invalid_argument("~pointcloud_min_z must be < ~pointcloud_max_z");
+  if (!(c.occupancy_band.min_z < c.occupancy_band.max_z))
+    throw std::invalid_argument("~occupancy_min_z must be < ~occupancy_max_z");
+  if (c.full_map_colors != "class" && c.full_map_colors != "uncertainty")
+    throw std::invalid_argument("~full_map_colors must be 'class' or 'uncertainty'");
   if (c.insert_queue_size < 1) throw std::invalid_argument("~insert_queue_size must be >= 1");
   if (!(c.probability_evidence >= 0.0))
     throw std::invalid_argument("~probability_evidence must be >= 0");

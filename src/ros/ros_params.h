@@ -6,6 +6,8 @@
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <ros/node_handle.h>
 
@@ -35,6 +37,15 @@ struct NodeConfig {
                                      // oldest is dropped (counted, warned, on ~status)
   bool latch = true;                 // latch the map topics (as octomap_server's `latch`)
   double load_map_max_mb = 4096.0;   // ~load_map refuses larger files (<= 0: no limit)
+  // octomap_server parity.
+  std::string map_file;              // map loaded at start-up: our .ot, or an occupancy .bt
+  std::string base_frame_id;         // frame of pointcloud_min_z/max_z ("" = frame_id)
+  HeightBand pointcloud_band;        // pointcloud_min_z/max_z: input points kept [m]
+  HeightBand occupancy_band;         // occupancy_min_z/max_z: leaves in views and 2-D maps [m]
+  std::string full_map_colors = "class";  // octomap_full's ColorOcTree: class | uncertainty
+  // projected_cost_map: cost 0..100 per class name; classes left out cost class_cost_default.
+  std::vector<std::pair<std::string, int>> class_costs;
+  int class_cost_default = 100;
   // Camera path (off unless use_camera): evidence image + CameraInfo paint the LiDAR cloud.
   bool use_camera = false;
   std::string camera_input = "evidence";  // evidence (32FC(C)) | label (mono8/mono16)

@@ -44,8 +44,8 @@ visualization_msgs::MarkerArray cubesByDepth(const std::vector<VoxelView>& voxel
     m.colors.push_back(colour_of(v));
   }
   for (visualization_msgs::Marker& m : array.markers)
-    m.action = m.points.empty() ? visualization_msgs::Marker::DELETE
-                                : visualization_msgs::Marker::ADD;
+    m.action =
+        m.points.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
   return array;
 }
 
@@ -62,22 +62,57 @@ visualization_msgs::MarkerArray semanticMarkers(const std::vector<VoxelView>& vo
   });
 }
 
-visualization_msgs::MarkerArray uncertaintyMarkers(const std::vector<VoxelView>& voxels,
-                                                   const UncertaintyRange& range,
-                                                   const std::string& frame_id, unsigned tree_depth) {
-  double lo = range.min, hi = range.max;
-  if (range.automatic && !voxels.empty()) {
-    lo = hi = voxels.front().uncertainty;
-    for (const VoxelView& v : voxels) {
-      lo = std::min<double>(lo, v.uncertainty);
-      hi = std::max<double>(hi, v.uncertainty);
-    }
+UncertaintyRange resolveRange(const std::vector<VoxelView>& voxels, const UncertaintyRange& range) {
+  UncertaintyRange fixed{false, range.min, range.max};
+  if (!range.automatic || voxels.empty()) return fixed;
+  fixed.min = fixed.max = voxels.front().uncertainty;
+  for (const VoxelView& v : voxels) {
+    fixed.min = std::min<double>(fixed.min, v.uncertainty);
+    fixed.max = std::max<double>(fixed.max, v.uncertainty);
   }
+  return fixed;
+}
+
+namespace {
+// Cubes coloured by uncertaintyColor of value_of(voxel) scaled from [lo, hi] to [0, 1].
+template <typename ValueOf>
+visualization_msgs::MarkerArray rampMarkers(const std::vector<VoxelView>& voxels,
+                                            const std::string& ns, double lo, double hi,
+                                            const std::string& frame_id, unsigned tree_depth,
+                                            ValueOf value_of) {
   const double span = hi > lo ? hi - lo : 1.0;
-  return cubesByDepth(voxels, "uncertainty", frame_id, tree_depth, [&](const VoxelView& v) {
-    const double t = std::min(1.0, std::max(0.0, (v.uncertainty - lo) / span));
+  return cubesByDepth(voxels, ns, frame_id, tree_depth, [&](const VoxelView& v) {
+    const double t = std::min(1.0, std::max(0.0, (value_of(v) - lo) / span));
     return toColor(uncertaintyColor(t));
   });
+}
+}  // namespace
+
+visualization_msgs::MarkerArray uncertaintyMarkers(const std::vector<VoxelView>& voxels,
+                                                   const UncertaintyRange& range,
+                                                   const std::string& frame_id,
+                                                   unsigned tree_depth) {
+  const UncertaintyRange r = resolveRange(voxels, range);
+  return rampMarkers(voxels, "uncertainty", r.min, r.max, frame_id, tree_depth,
+                     [](const VoxelView& v) { return v.uncertainty; });
+}
+
+visualization_msgs::MarkerArray conflictMarkers(const std::vector<VoxelView>& voxels,
+                                                const std::string& frame_id, unsigned tree_depth) {
+  return rampMarkers(voxels, "conflict", 0.0, 1.0, frame_id, tree_depth,
+                     [](const VoxelView& v) { return v.conflict; });
+}
+
+visualization_msgs::MarkerArray freeMarkers(const std::vector<VoxelView>& voxels,
+                                            const std::string& frame_id, unsigned tree_depth) {
+  // octomap_server's colour of free space: translucent green.
+  std_msgs::ColorRGBA green;
+  green.g = 1.f;
+  green.a = 0.25f;
+  auto array =
+      cubesByDepth(voxels, "free", frame_id, tree_depth, [&](const VoxelView&) { return green; });
+  for (auto& m : array.markers) m.color = green;
+  return array;
 }
 
 }  // namespace evidential_octomap

@@ -1,12 +1,13 @@
 // rviz views of the map, kept apart from mapping: semantic markers (class colours from the class
-// table) and uncertainty markers (evidential_octomap::uncertaintyColor). One CUBE_LIST marker per
-// tree depth, as octomap_server does; depths without voxels get a DELETE so stale cubes vanish.
+// table), uncertainty and conflict markers (evidential_octomap::uncertaintyColor ramp) and free
+// space. One CUBE_LIST marker per tree depth, as octomap_server does; depths without voxels get
+// a DELETE so stale cubes vanish.
 #pragma once
+
+#include <visualization_msgs/MarkerArray.h>
 
 #include <string>
 #include <vector>
-
-#include <visualization_msgs/MarkerArray.h>
 
 #include "conversions.h"
 #include "evidential_octomap/class_table.h"
@@ -24,8 +25,20 @@ visualization_msgs::MarkerArray semanticMarkers(const std::vector<VoxelView>& vo
                                                 const ClassTable& classes,
                                                 const std::string& frame_id, unsigned tree_depth);
 
+// The range actually drawn: `range` itself, or the voxels' own min..max when automatic.
+UncertaintyRange resolveRange(const std::vector<VoxelView>& voxels, const UncertaintyRange& range);
+
 visualization_msgs::MarkerArray uncertaintyMarkers(const std::vector<VoxelView>& voxels,
                                                    const UncertaintyRange& range,
-                                                   const std::string& frame_id, unsigned tree_depth);
+                                                   const std::string& frame_id,
+                                                   unsigned tree_depth);
+
+// Conflict in [0, 1) (VoxelOpinion::conflict) on the same colour ramp, fixed range 0..1.
+visualization_msgs::MarkerArray conflictMarkers(const std::vector<VoxelView>& voxels,
+                                                const std::string& frame_id, unsigned tree_depth);
+
+// Free leaves in octomap_server's translucent green.
+visualization_msgs::MarkerArray freeMarkers(const std::vector<VoxelView>& voxels,
+                                            const std::string& frame_id, unsigned tree_depth);
 
 }  // namespace evidential_octomap

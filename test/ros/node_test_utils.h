@@ -15,6 +15,13 @@
 
 namespace node_test {
 
+// The node under test and the SemanticKITTI class table its launch files load.
+inline const std::string kNode = "/evidential_mapping_node";
+constexpr int kClasses = 20;
+constexpr int kRoad = 9;
+constexpr int kBuilding = 13;  // colour (255, 200, 0)
+constexpr int kPole = 18;
+
 // One point of a synthetic scene and its class.
 struct Point {
   float x, y, z;

@@ -499,10 +499,15 @@ TEST(ToPointCloud2, FieldsHoldLabelUncertaintyAndClassColour) {
   voxels[0].center = octomap::point3d(1, 2, 3);
   voxels[0].label = 1;
   voxels[0].uncertainty = 0.25f;
+  voxels[0].conflict = 0.125f;
   voxels[1].label = -1;
   const auto msg = toPointCloud2(voxels, fourClasses(), "map");
   ASSERT_EQ(msg.width, 2u);
-  ASSERT_EQ(msg.fields.size(), 6u);
+  ASSERT_EQ(msg.fields.size(), 7u);
+  EXPECT_EQ(msg.fields[6].name, "conflict");
+  float conflict;
+  std::memcpy(&conflict, msg.data.data() + msg.fields[6].offset, 4);
+  EXPECT_FLOAT_EQ(conflict, 0.125f);
   EXPECT_EQ(msg.header.frame_id, "map");
   // Read it back through the same reader's layout rules.
   int32_t label;
@@ -563,6 +568,65 @@ TEST(UncertaintyMarkers, ColoursFollowTheUncertaintyColourMap) {
   const auto scaled = uncertaintyMarkers(voxels, automatic, "map", 16);
   EXPECT_FLOAT_EQ(scaled.markers[16].colors[1].r, hi[0] / 255.f);
   EXPECT_FLOAT_EQ(scaled.markers[16].colors[0].g, lo[1] / 255.f);
+}
+
+TEST(ConflictMarkers, ColoursFollowTheColourMapOverZeroToOne) {
+  std::vector<VoxelView> voxels(2);
+  voxels[0].depth = voxels[1].depth = 16;
+  voxels[0].conflict = 0.f;
+  voxels[1].conflict = 0.5f;
+  const auto array = conflictMarkers(voxels, "map", 16);
+  const auto lo = uncertaintyColor(0.0), mid = uncertaintyColor(0.5);
+  EXPECT_EQ(array.markers[16].ns, "conflict");
+  EXPECT_FLOAT_EQ(array.markers[16].colors[0].g, lo[1] / 255.f);
+  EXPECT_FLOAT_EQ(array.markers[16].colors[1].r, mid[0] / 255.f);
+}
+
+TEST(LeafViews, OccupiedAndFreeLeavesPartitionTheKnownLeaves) {
+  auto tree = wallMap();
+  const auto occupied = occupiedVoxels(*tree), free = freeVoxels(*tree);
+  EXPECT_GT(occupied.size(), 50u);
+  EXPECT_GT(free.size(), 50u);
+  EXPECT_EQ(occupied.size() + free.size(), tree->getNumLeafNodes());
+  for (const auto& v : free) {
+    EXPECT_FALSE(tree->isNodeOccupied(tree->search(v.center, v.depth)));
+    EXPECT_EQ(v.label, -1);
+  }
+  const auto free_markers = freeMarkers(free, "map", 16);
+  size_t cubes = 0;
+  for (const auto& m : free_markers.markers) cubes += m.points.size();
+  EXPECT_EQ(cubes, free.size());
+}
+
+TEST(LeafViews, HeightBandKeepsLeavesWhoseCentreIsInside) {
+  auto tree = wallMap();  // wall voxels from z = -0.5 to 0.5
+  HeightBand band;
+  band.min_z = 0.0;
+  const auto above = occupiedVoxels(*tree, Box(), band);
+  ASSERT_GT(above.size(), 10u);
+  for (const auto& v : above) EXPECT_GE(v.center.z(), 0.0);
+  EXPECT_LT(above.size(), occupiedVoxels(*tree).size());
+}
+
+TEST(KeepHeightBand, KeepsPointsInsideTheBandInTheGivenFrameWithTheirEvidence) {
+  SemanticCloud scan;
+  const int C = 2;
+  for (int i = 0; i < 5; ++i) {
+    scan.points_S.push_back(0.f, 0.f, float(i));  // z_S = 0 .. 4
+    scan.evidence.insert(scan.evidence.end(), {float(i), 10.f * i});
+  }
+  HeightBand band;
+  band.min_z = 1.5;
+  band.max_z = 3.5;
+  // Frame F sits 1 m below the sensor: z_F = z_S + 1, so z_S 1 and 2 are inside.
+  const octomap::pose6d T_F_S(0, 0, 1, 0, 0, 0);
+  EXPECT_EQ(keepHeightBand(T_F_S, band, C, &scan), 3u);
+  ASSERT_EQ(scan.points_S.size(), 2u);
+  EXPECT_FLOAT_EQ(scan.points_S[0].z(), 1.f);
+  EXPECT_FLOAT_EQ(scan.points_S[1].z(), 2.f);
+  EXPECT_EQ(scan.evidence, (std::vector<float>{1.f, 10.f, 2.f, 20.f}));
+  // Unbounded: nothing removed.
+  EXPECT_EQ(keepHeightBand(T_F_S, HeightBand(), C, &scan), 0u);
 }
 
 int main(int argc, char** argv) {

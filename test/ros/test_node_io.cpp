@@ -7,13 +7,19 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
+#include <nav_msgs/OccupancyGrid.h>
 #include <ros/ros.h>
 #include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/Image.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <std_srvs/Empty.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 #include <visualization_msgs/MarkerArray.h>
+#ifdef EVIDENTIAL_OCTOMAP_HAVE_OCTOMAP_MSGS
+#include <octomap_msgs/Octomap.h>
+#endif
 
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <vector>
@@ -25,15 +31,10 @@
 #include "node_test_utils.h"
 
 namespace eo = evidential_octomap;
-using node_test::gp;
-using node_test::waitFor;
+using namespace node_test;
 
 namespace {
 
-constexpr int kC = 20;
-constexpr int kBuilding = 13;
-constexpr int kPole = 18;
-const std::string kNode = "/evidential_mapping_node";
 
 class NodeIoTest : public ::testing::Test {
  protected:
@@ -92,7 +93,7 @@ size_t cubes(const visualization_msgs::MarkerArray& a) {
 TEST_F(NodeIoTest, LateSubscribersGetEveryView) {
   const uint64_t before = status_->clouds_received;
   cloud_pub_.publish(node_test::cloudOf(
-      node_test::wall(4.05f, -2.f, 2.f, 0.f, 1.5f, 0.05f, kBuilding), "lidar", kC));
+      node_test::wall(4.05f, -2.f, 2.f, 0.f, 1.5f, 0.05f, kBuilding), "lidar", kClasses));
   ASSERT_TRUE(waitUntilIdle(before + 1));
   ASSERT_EQ(labelAt(5.05, 0.0, 0.75), kBuilding);
   // Mapping has ended. A view subscribed now, then the next, and so on (as a user ticks rviz
@@ -105,10 +106,23 @@ TEST_F(NodeIoTest, LateSubscribersGetEveryView) {
   expectReceived<sensor_msgs::PointCloud2>(nh_, "semantic_cloud", many_points);
   expectReceived<sensor_msgs::PointCloud2>(nh_, "octomap_point_cloud_centers", many_points);
   expectReceived<eo::EvidentialMap>(nh_, "evidential_map", [](const eo::EvidentialMap& m) {
-    return m.num_classes == kC && m.data.size() > 4000;
+    return m.num_classes == kClasses && m.data.size() > 4000;
   });
   expectReceived<eo::OccupancyMap>(nh_, "occupancy_map",
                                    [](const eo::OccupancyMap& m) { return m.data.size() > 400; });
+  expectReceived<MarkerArray>(nh_, "conflict_cells_vis_array", many_cubes);
+  expectReceived<MarkerArray>(nh_, "free_cells_vis_array", many_cubes);
+  expectReceived<nav_msgs::OccupancyGrid>(
+      nh_, "projected_map", [](const nav_msgs::OccupancyGrid& g) {
+        return std::count(g.data.begin(), g.data.end(), 100) > 10;
+      });
+  expectReceived<sensor_msgs::Image>(nh_, kNode + "/legend",
+                                     [](const sensor_msgs::Image& i) { return i.height > 100; });
+#ifdef EVIDENTIAL_OCTOMAP_HAVE_OCTOMAP_MSGS
+  for (const char* topic : {"octomap_binary", "octomap_full", "evidential_octomap_full"})
+    expectReceived<octomap_msgs::Octomap>(
+        nh_, topic, [](const octomap_msgs::Octomap& m) { return m.data.size() > 100; });
+#endif
 }
 
 TEST_F(NodeIoTest, EveryCloudOfABurstIsInsertedOrCountedAsDropped) {
@@ -144,9 +158,9 @@ TEST_F(NodeIoTest, EveryCloudOfABurstIsInsertedOrCountedAsDropped) {
   // its own wall (pole class, off to the side) so that the map shows whether it was kept.
   constexpr int kBurst = 10;
   const auto far = node_test::cloudOf(
-      node_test::wall(40.05f, -40.f, 40.f, -2.f, 18.f, 0.2f, kBuilding), "lidar", kC);
+      node_test::wall(40.05f, -40.f, 40.f, -2.f, 18.f, 0.2f, kBuilding), "lidar", kClasses);
   const auto last =
-      node_test::cloudOf(node_test::wall(20.05f, 8.f, 10.f, 0.f, 1.f, 0.05f, kPole), "lidar", kC);
+      node_test::cloudOf(node_test::wall(20.05f, 8.f, 10.f, 0.f, 1.f, 0.05f, kPole), "lidar", kClasses);
   for (int i = 0; i < kBurst; ++i) {
     auto msg = i + 1 < kBurst ? far : last;
     msg.header.stamp = ros::Time::now();

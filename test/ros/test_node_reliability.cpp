@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "evidential_octomap/BoundingBoxQuery.h"
 #include "evidential_octomap/ClearBbx.h"
 #include "evidential_octomap/LoadMap.h"
 #include "evidential_octomap/MappingStatus.h"
@@ -187,13 +188,17 @@ TEST_F(NodeReliabilityTest, ClearBbxRefusesNonFiniteAndInvertedBoxes) {
       {gp(6.0, 3.0, 2.0), gp(4.0, -3.0, -1.0)},          // inverted
       {gp(4.0, -3.0, -1.0), gp(INFINITY, 3.0, 2.0)}};
   for (const auto& [min, max] : boxes) {
-    eo::ClearBbx srv;
+    eo::ClearBbx srv;  // ~clear_box replies with the reason
     srv.request.min = min;
     srv.request.max = max;
-    ASSERT_TRUE(ros::service::call(kNode + "/clear_bbx", srv));
+    ASSERT_TRUE(ros::service::call(kNode + "/clear_box", srv));
     EXPECT_FALSE(srv.response.success);
     EXPECT_NE(srv.response.message.find("refused"), std::string::npos) << srv.response.message;
     EXPECT_EQ(srv.response.voxels_cleared, 0u);
+    eo::BoundingBoxQuery octomap_server_style;  // ~clear_bbx's reply is empty: the call fails
+    octomap_server_style.request.min = min;
+    octomap_server_style.request.max = max;
+    EXPECT_FALSE(ros::service::call(kNode + "/clear_bbx", octomap_server_style));
   }
   EXPECT_EQ(snapshot(), before) << "a refused box changed the map";
   EXPECT_EQ(wallLabel(), kBuilding);
