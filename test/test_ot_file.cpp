@@ -419,7 +419,7 @@ TEST(StockTools, ConvertOctreeReadsOurBtAsAPlainOcTree) {
 }
 
 // The ColorOcTree export is the file for stock viewers and converters: convert_octree turns it
-// into a .bt with our occupancy (octovis shows it; not run here, it needs a display).
+// into a .bt with our occupancy.
 TEST(StockTools, ConvertOctreeReadsTheColorExport) {
   if (!haveTool("convert_octree")) GTEST_SKIP() << "convert_octree missing (Debian: octomap-tools)";
   TempDir dir;
@@ -433,6 +433,62 @@ TEST(StockTools, ConvertOctreeReadsTheColorExport) {
   EXPECT_EQ(out.find("legacy"), std::string::npos) << out;
   octomap::OcTree plain(0.1);
   ASSERT_TRUE(plain.readBinary(bt));
+  EXPECT_TRUE(occupiedLeafKeys(plain) == occupiedLeafKeys(*tree));
+}
+
+// Our .ot, .bt and ColorOcTree export opened the way octovis opens a file, by a program linked
+// only with the stock OctoMap library (test/stock_octomap_open.cpp; octovis itself needs a
+// display and answers a refusal with a dialog): our .ot is refused, never drawn wrongly; the two
+// exports open as their stock types with our occupied voxels.
+TEST(StockTools, OctovisWayOfOpeningRefusesOurOtAndOpensTheExports) {
+  TempDir dir;
+  auto tree = makeMap("dempster");
+  const std::string ot = dir.file("map.ot"), bt = dir.file("map.bt"), color = dir.file("color.ot");
+  ASSERT_TRUE(tree->write(ot));
+  saveBinaryOccupancy(*tree, bt);
+  ASSERT_TRUE(toColorOcTree(*tree, threeClasses(), ColorMode::kClass)->write(color));
+  const std::string open = STOCK_OCTOMAP_OPEN;
+  const size_t occupied = occupiedLeafKeys(*tree).size();
+  ASSERT_GT(occupied, 100u);
+
+  const auto [ot_code, ot_out] = runTool(open + " " + ot);
+  EXPECT_EQ(ot_code, 1) << ot_out;
+  EXPECT_NE(ot_out.find("refused"), std::string::npos) << ot_out;
+
+  for (const auto& [path, type] : {std::pair{bt, "OcTree"}, std::pair{color, "ColorOcTree"}}) {
+    const auto [code, out] = runTool(open + " " + path);
+    ASSERT_EQ(code, 0) << out;
+    // OctoMap's own progress lines come first; the program's answer is the last line.
+    const size_t last_line = out.find_last_of('\n', out.size() - 2);
+    std::istringstream fields(out.substr(last_line == std::string::npos ? 0 : last_line + 1));
+    std::string read_type;
+    size_t leaves = 0, read_occupied = 0;
+    fields >> read_type >> leaves >> read_occupied;
+    EXPECT_EQ(read_type, type) << out;
+    EXPECT_EQ(read_occupied, occupied) << path;
+  }
+}
+
+// edit_octree takes .bt files only: it refuses our .ot without writing anything and rewrites
+// our .bt with the same occupied voxels.
+TEST(StockTools, EditOctreeRefusesOurOtAndRewritesOurBt) {
+  if (!haveTool("edit_octree")) GTEST_SKIP() << "edit_octree missing (Debian: octomap-tools)";
+  TempDir dir;
+  auto tree = makeMap("dempster");
+  const std::string ot = dir.file("map.ot"), bt = dir.file("map.bt");
+  ASSERT_TRUE(tree->write(ot));
+  saveBinaryOccupancy(*tree, bt);
+
+  const std::string from_ot = dir.file("from_ot.bt");
+  const auto [ot_code, ot_out] = runTool("edit_octree -o " + from_ot + " " + ot);
+  EXPECT_NE(ot_code, 0) << ot_out;
+  EXPECT_FALSE(fs::exists(from_ot)) << ot_out;
+
+  const std::string from_bt = dir.file("from_bt.bt");
+  const auto [bt_code, bt_out] = runTool("edit_octree -o " + from_bt + " " + bt);
+  ASSERT_EQ(bt_code, 0) << bt_out;
+  octomap::OcTree plain(0.1);
+  ASSERT_TRUE(plain.readBinary(from_bt)) << bt_out;
   EXPECT_TRUE(occupiedLeafKeys(plain) == occupiedLeafKeys(*tree));
 }
 
