@@ -10,7 +10,7 @@
 # Writes out/demo/{map.ot, metrics.md, metrics.json, semantic.png, uncertainty.png, error.png}
 # (compare: out/compare/{compare.md, compare.json}). Knobs (environment):
 #   JOBS=N          build parallelism (default 2)
-#   DEMO_SCANS=N    map only the first N scans (default: all 10; the CI smoke test uses 2)
+#   DEMO_SCANS=N    map only the first N scans (default: all 10)
 #   DEMO_OUT=dir    output directory (default out)
 #   DEMO_VIEW=0     never open the pictures (default: open them when there is a display)
 set -euo pipefail
