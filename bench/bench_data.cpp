@@ -145,28 +145,6 @@ std::vector<float> derivedEvidence(const std::vector<int>& classes, int num_clas
   return evidence;
 }
 
-Scan subsample(const Scan& scan, size_t target, uint32_t seed) {
-  const size_t n = scan.points_W.size();
-  if (target >= n) return scan;
-  std::vector<uint32_t> order(n);
-  std::iota(order.begin(), order.end(), 0u);
-  std::mt19937 rng(seed);
-  for (size_t i = 0; i < target; ++i) {
-    std::uniform_int_distribution<size_t> pick(i, n - 1);
-    std::swap(order[i], order[pick(rng)]);
-  }
-  std::sort(order.begin(), order.begin() + target);  // keep the scan order (ring structure)
-  Scan out;
-  out.origin_W = scan.origin_W;
-  out.points_W.reserve(target);
-  out.classes.reserve(target);
-  for (size_t i = 0; i < target; ++i) {
-    out.points_W.push_back(scan.points_W.getPoint(order[i]));
-    out.classes.push_back(scan.classes[order[i]]);
-  }
-  return out;
-}
-
 double median(std::vector<double> values) {
   if (values.empty()) return 0.0;
   std::sort(values.begin(), values.end());

@@ -33,9 +33,6 @@ std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& c
 std::vector<float> derivedEvidence(const std::vector<int>& classes, int num_classes,
                                    float magnitude = 20.0f);
 
-// A random subset of `target` points (fixed seed; the whole scan when it has fewer points).
-Scan subsample(const Scan& scan, size_t target, uint32_t seed);
-
 double median(std::vector<double> values);
 
 // CPU time of the whole process (all threads) [ms]: robust to other load on the machine, unlike

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include <cstdio>
 #include <random>
 
 #include "evidential_octomap/evidential_octree.h"
@@ -127,5 +128,91 @@ TEST(RayCasting, EveryRayVisitsOctoMapsKeysInOctoMapsOrder) {
       keys += ours.size();
     }
     EXPECT_GT(keys, 100000u) << "resolution " << resolution;
+  }
+}
+
+// --- fast free space (SemanticConfig::fast_free_space): approximate by design ----------------
+
+namespace {
+
+EvidentialOcTree mapOneScan(const octomap::Pointcloud& cloud, bool fast, double max_range) {
+  SemanticConfig config;
+  config.fast_free_space = fast;
+  config.max_range = max_range;
+  config.threads = 2;
+  EvidentialOcTree tree(0.2, 3, config);
+  tree.insertSemanticScan(cloud, std::vector<float>(cloud.size() * 3, 0.0f),
+                          octomap::point3d(0.3f, -0.2f, 0.1f));
+  tree.expand();  // leaf by leaf at the finest depth
+  return tree;
+}
+
+struct FreeSpaceComparison {
+  size_t exact_free = 0, fast_free = 0, fast_free_not_exact = 0;
+  size_t exact_occupied = 0, occupied_differ = 0;
+};
+
+FreeSpaceComparison compareWithExact(const octomap::Pointcloud& cloud, double max_range) {
+  const EvidentialOcTree exact = mapOneScan(cloud, false, max_range);
+  const EvidentialOcTree fast = mapOneScan(cloud, true, max_range);
+  FreeSpaceComparison c;
+  for (auto it = exact.begin_leafs(); it != exact.end_leafs(); ++it) {
+    const bool occupied = exact.isNodeOccupied(*it);
+    (occupied ? c.exact_occupied : c.exact_free) += 1;
+    const auto* other = fast.search(it.getKey());
+    if (occupied && (!other || !fast.isNodeOccupied(*other))) ++c.occupied_differ;
+  }
+  for (auto it = fast.begin_leafs(); it != fast.end_leafs(); ++it) {
+    if (fast.isNodeOccupied(*it)) {
+      if (!exact.search(it.getKey())) ++c.occupied_differ;
+      continue;
+    }
+    ++c.fast_free;
+    const auto* other = exact.search(it.getKey());
+    if (!other || exact.isNodeOccupied(*other)) ++c.fast_free_not_exact;
+  }
+  return c;
+}
+
+}  // namespace
+
+// In one scan the fast mode marks the same voxels occupied, clears only voxels the exact mode
+// clears (up to the reversed DDA's rounding at cell corners) and most of them; the rays overlap
+// near the sensor, which is the work it skips.
+TEST(RayCasting, FastFreeSpaceKeepsHitsAndClearsMostOfTheExactFreeSpace) {
+  for (double max_range : {-1.0, 20.0}) {
+    const FreeSpaceComparison c = compareWithExact(syntheticRoomScan(5), max_range);
+    EXPECT_GT(c.exact_occupied, 1000u);
+    EXPECT_EQ(c.occupied_differ, 0u) << "max range " << max_range;
+    EXPECT_LE(c.fast_free, c.exact_free);
+    EXPECT_GE(c.fast_free, c.exact_free * 7 / 10) << "max range " << max_range;
+    // The reversed DDA leaves a ray through a cell corner by the other neighbour: ~0.1 %.
+    EXPECT_LE(c.fast_free_not_exact, c.fast_free / 200) << "max range " << max_range;
+    std::printf("max range %g: exact free %zu, fast free %zu, fast free not exact %zu\n", max_range,
+                c.exact_free, c.fast_free, c.fast_free_not_exact);
+  }
+}
+
+// A lone ray has no other ray to stop at: it clears what the exact ray clears.
+TEST(RayCasting, FastFreeSpaceCastsALoneRayWhole) {
+  octomap::Pointcloud cloud;
+  cloud.push_back(octomap::point3d(17.3f, 5.1f, -2.2f));
+  const FreeSpaceComparison c = compareWithExact(cloud, -1.0);
+  EXPECT_GT(c.exact_free, 80u);
+  EXPECT_EQ(c.occupied_differ, 0u);
+  EXPECT_LE(c.fast_free_not_exact, 2u);
+  EXPECT_GE(c.fast_free + 2, c.exact_free);
+}
+
+// Rays are split among the threads in fixed chunks, so the map does not depend on timing.
+TEST(RayCasting, FastFreeSpaceIsDeterministic) {
+  const octomap::Pointcloud cloud = syntheticRoomScan(9);
+  const EvidentialOcTree a = mapOneScan(cloud, true, -1.0);
+  const EvidentialOcTree b = mapOneScan(cloud, true, -1.0);
+  ASSERT_EQ(a.size(), b.size());
+  for (auto it = a.begin_leafs(); it != a.end_leafs(); ++it) {
+    const auto* other = b.search(it.getKey());
+    ASSERT_NE(other, nullptr);
+    ASSERT_EQ(other->getLogOdds(), it->getLogOdds());
   }
 }

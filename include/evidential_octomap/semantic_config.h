@@ -58,6 +58,13 @@ struct SemanticConfig {
   bool kernel_creates_leaves = false;
   // Insert occupancy through OctoMap's discretized ray casting (one ray per hit voxel).
   bool discretize = true;
+  // Fast free space for live mapping (not exact): each ray is cast back from its end and stops
+  // after two cells already cleared by this scan's other rays, so the many rays that overlap
+  // near the sensor are cast once (voxblox's "fast" integrator rule). Hits, semantics and the
+  // free space near the hits are as in the exact mode; a few cells that only a stopped ray
+  // would have crossed stay unobserved that scan (docs/benchmarks.md measures the difference).
+  // An insertion setting like threads: not stored in the map.
+  bool fast_free_space = false;
   // Threads for the semantic pass (0 = OpenMP default).
   int threads = 0;
 

@@ -53,6 +53,7 @@ void bindConfig(nb::module_& m) {
       .def_rw("kernel_creates_leaves", &SemanticConfig::kernel_creates_leaves,
               "Let kernel updates create leaves in unknown space.")
       .def_rw("discretize", &SemanticConfig::discretize)
+      .def_rw("fast_free_space", &SemanticConfig::fast_free_space)
       .def_rw("threads", &SemanticConfig::threads,
               "Threads of the semantic pass (0: OpenMP default).")
       .def("__repr__", [](const SemanticConfig& c) {

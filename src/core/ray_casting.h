@@ -25,11 +25,15 @@ enum RayFlag : int {
 bool rayKeys(const EvidentialOcTree& tree, const octomap::point3d& origin,
              const octomap::point3d& end, std::vector<octomap::OcTreeKey>* keys);
 
+// Fast free space: a ray traced back from its end stops after this many consecutive cells
+// already marked free in the same scan.
+constexpr int kFastFreeCollisions = 2;
+
 // Casts the rays of points_W (finite, inside the tree's key range) from origin_W. per_thread
 // holds one VoxelBricks per thread, reused across scans; the result is in per_thread[0], bricks
-// sorted (forEachSorted).
+// sorted (forEachSorted). fast_free_space: SemanticConfig::fast_free_space.
 void castRays(const EvidentialOcTree& tree, const std::vector<octomap::point3d>& points_W,
               const octomap::point3d& origin_W, double max_range, bool discretize,
-              std::vector<VoxelBricks>* per_thread);
+              bool fast_free_space, std::vector<VoxelBricks>* per_thread);
 
 }  // namespace evidential_octomap

@@ -135,7 +135,8 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   }
   if (cloud.empty()) return stats;
   scratch.bricks.resize(threads);
-  castRays(*tree, cloud, origin_W, config_.max_range, config_.discretize, &scratch.bricks);
+  castRays(*tree, cloud, origin_W, config_.max_range, config_.discretize, config_.fast_free_space,
+           &scratch.bricks);
   timer.stop(&stats.ms_occupancy, &stats.cpu_ms_occupancy);
 
   // 2. Semantic points: percentile threshold, down-sampling, opinions and supports.

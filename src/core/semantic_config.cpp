@@ -92,6 +92,7 @@ void SemanticConfig::print(std::ostream& out) const {
       << "max_range: " << max_range << "\n"
       << "kernel_creates_leaves: " << (kernel_creates_leaves ? "true" : "false") << "\n"
       << "discretize: " << (discretize ? "true" : "false") << "\n"
+      << "fast_free_space: " << (fast_free_space ? "true" : "false") << "\n"
       << "threads: " << threads << "\n";
 }
 

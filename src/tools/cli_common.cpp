@@ -49,6 +49,10 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
       ->capture_default_str();
   cmd->add_option("--threads", c->threads, "Threads of the semantic pass (0: OpenMP default)")
       ->capture_default_str();
+  cmd->add_option("--fast-free-space", c->fast_free_space,
+                  "Fast free space for live use: rays stop in space this scan already cleared "
+                  "(not exact; true/false)")
+      ->capture_default_str();
 }
 
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_name) {

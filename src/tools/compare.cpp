@@ -371,6 +371,9 @@ void addCompareCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--threads", o->base.threads, "Threads of the semantic pass (0: default)")
       ->capture_default_str();
+  cmd->add_option("--fast-free-space", o->base.fast_free_space,
+                  "Fast free space in every row (not exact; true/false)")
+      ->capture_default_str();
   cmd->add_option("-E,--evidence-magnitude", o->evidence.magnitude,
                   "Evidence magnitude E of derived sources")
       ->capture_default_str();
