@@ -387,8 +387,8 @@ void insertTable(const std::vector<RangeRun>& runs, Report* r) {
            "insert casts OctoMap's discretized rays (the `SemanticConfig` default), so "
            "`discretize` is the like-for-like occupancy reference and the undiscretized call "
            "OctoMap's default. Parallel share: 2 × (process CPU − calling thread's CPU) / "
-           "process CPU of the 2-thread insert (libgomp's spin-waiting counts as worker CPU, so "
-           "this is an upper bound).\n";
+           "process CPU of the 2-thread insert; under `OMP_WAIT_POLICY=passive` (bench.sh) an "
+           "idle worker sleeps, so its CPU is work (spinning would count as parallel work).\n";
 }
 
 void phaseTable(const std::vector<RangeRun>& runs, Report* r) {
