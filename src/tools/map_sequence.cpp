@@ -7,6 +7,7 @@
 #include "dataset.h"
 #include "evidential_octomap/io.h"
 #include "pipeline.h"
+#include "quality_plot.h"
 #include "render.h"
 #include "report.h"
 #include "synthetic.h"
@@ -51,8 +52,8 @@ void runMap(const MapOptions& o) {
   MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,
                           !o.quiet, "mapping");
   std::vector<float> query_evidence;
-  const std::vector<Query> queries = buildQueries(scans, protocol.query_scans,
-                                                  classes.ignore_class, &evidence, &query_evidence);
+  const std::vector<Query> queries =
+      buildQueries(scans, protocol.query_scans, classes.ignore_class, &evidence, &query_evidence);
 
   RunReport r;
   r.dataset = o.data;
@@ -70,8 +71,8 @@ void runMap(const MapOptions& o) {
   r.map = evaluateMap(*run.tree, queries, classes.ignore_class);
   r.input = evaluateInput(queries, query_evidence, classes.numClasses(), classes.ignore_class);
   r.input_description = inputDescription(ev);
-  r.occupied_without_endpoint = static_cast<long long>(occupiedWithoutEndpoint(
-      *run.tree, endpointKeys(scans, protocol.map_scans, o.resolution)));
+  r.occupied_without_endpoint = static_cast<long long>(
+      occupiedWithoutEndpoint(*run.tree, endpointKeys(scans, protocol.map_scans, o.resolution)));
   r.ms_per_scan = run.ms_per_scan;
   r.totals = run.total;
   fillTreeStats(*run.tree, &r);
@@ -87,14 +88,18 @@ void runMap(const MapOptions& o) {
       return captionLines(what, r.variant, r.evidence_description, r.evidence_kind, r.protocol,
                           r.predictions_note);
     };
-    writePng(o.out + "/semantic.png", renderSemantic(*run.tree, classes, grid, caption("semantic map")));
-    writePng(o.out + "/uncertainty.png",
-             renderUncertainty(*run.tree, uncertaintyScale(*run.tree), grid, caption("uncertainty")));
+    writePng(o.out + "/semantic.png",
+             renderSemantic(*run.tree, classes, grid, caption("semantic map")));
+    writePng(o.out + "/uncertainty.png", renderUncertainty(*run.tree, uncertaintyScale(*run.tree),
+                                                           grid, caption("uncertainty")));
     writePng(o.out + "/error.png",
              renderError(*run.tree, queries, grid, caption("errors of the GT queries")));
+    writePng(o.out + "/quality.png",
+             renderQualityCurves(r.map.quality, r.input,
+                                 caption("does the uncertainty flag the errors?")));
   }
   std::cout << md << "\nwrote " << o.out << "/{map.ot,metrics.json,metrics.md"
-            << (o.render ? ",semantic.png,uncertainty.png,error.png" : "") << "}\n";
+            << (o.render ? ",semantic.png,uncertainty.png,error.png,quality.png" : "") << "}\n";
 }
 
 }  // namespace
@@ -105,7 +110,8 @@ void addMapCommand(CLI::App& app) {
       "map",
       "Map a SemanticKITTI-layout sequence (velodyne/, labels/, predictions/ or evidence/, "
       "poses.txt, calib.txt) or one pose-less scan; write map.ot, metrics.json, metrics.md, "
-      "semantic.png, uncertainty.png, error.png");
+      "semantic.png, uncertainty.png, error.png, quality.png (error-vs-uncertainty curves and "
+      "reliability diagram)");
   cmd->add_option("--data", o->data, "Dataset directory (or a single .bin scan)")
       ->required()
       ->check(CLI::ExistingPath);

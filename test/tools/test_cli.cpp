@@ -159,7 +159,7 @@ Result CliEndToEnd::map_result_;
 TEST_F(CliEndToEnd, MapWritesEveryOutput) {
   ASSERT_EQ(map_result_.status, 0) << map_result_.output;
   for (const char* f : {"map.ot", "metrics.json", "metrics.md", "semantic.png", "uncertainty.png",
-                        "error.png"}) {
+                        "error.png", "quality.png"}) {
     EXPECT_TRUE(fs::exists(out_ + "/map/" + f)) << f;
     EXPECT_GT(fs::file_size(out_ + "/map/" + f), 100u) << f;
   }

@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "evidential_octomap/io.h"
+#include "quality_plot.h"
 #include "render.h"
 #include "test_helpers.h"
 
@@ -77,8 +78,8 @@ TEST(UncertaintyLayer, UsesTheSharedColourMap) {
 TEST(ErrorLayer, RightWrongAndUncoveredQueriesHaveTheirColours) {
   Scene s;
   const TopDownGrid g = makeGrid(s.tree, nullptr);
-  const std::vector<Query> q{{s.a, 1, 1},                               // right
-                             {s.b, 1, 1},                               // wrong (b says 2)
+  const std::vector<Query> q{{s.a, 1, 1},                                     // right
+                             {s.b, 1, 1},                                     // wrong (b says 2)
                              {octomap::point3d(0.25f, 1.25f, 0.25f), 1, 1}};  // unknown
   const cv::Mat m = errorLayer(s.tree, q, g);
   EXPECT_EQ(m.at<cv::Vec3b>(3, 0), cv::Vec3b(60, 170, 40));
@@ -90,12 +91,33 @@ TEST(Render, FullImageHasCaptionAndPanelAndWritesAPng) {
   Scene s;
   const TopDownGrid g = makeGrid(s.tree, nullptr);
   const cv::Mat img = renderSemantic(s.tree, s.classes, g, {"line one", "line two"});
-  EXPECT_GT(img.cols, g.width + 100);   // legend panel on the right
-  EXPECT_GT(img.rows, g.height + 40);   // two caption lines on top
+  EXPECT_GT(img.cols, g.width + 100);  // legend panel on the right
+  EXPECT_GT(img.rows, g.height + 40);  // two caption lines on top
   const std::string path = tools_test::freshDir("render") + "/semantic.png";
   writePng(path, img);
   const cv::Mat back = cv::imread(path);
   ASSERT_FALSE(back.empty());
   EXPECT_EQ(back.size(), img.size());
   EXPECT_THROW(writePng("/nonexistent/dir/x.png", img), std::runtime_error);
+}
+
+// The quality picture puts each decile's error rate and each reliability bin where the axes say.
+TEST(QualityCurves, PointsSitAtTheirDataCoordinates) {
+  QualityMetrics map, input;
+  map.error_rate_labelled = 0.2;
+  ErrorDetection u;
+  u.output = "u";
+  for (int i = 0; i < 10; ++i) u.error_rate_by_decile.push_back(0.043 * i);  // top 0.387
+  map.error_detection.push_back(u);
+  map.reliability.push_back({0.4, 0.5, 7, 0.45, 0.25});
+  const std::vector<std::string> caption{"one line"};
+  const cv::Mat img = renderQualityCurves(map, input, caption);
+  EXPECT_DOUBLE_EQ(errorAxisTop(map, input), 0.4);
+  const PlotFrame left = errorCurveFrame(1, 0.4);
+  const cv::Scalar c = outputColour(0);
+  const cv::Vec3b colour(c[0], c[1], c[2]);
+  EXPECT_EQ(img.at<cv::Vec3b>(left.toPixel(0.05, 0.0)), colour);
+  EXPECT_EQ(img.at<cv::Vec3b>(left.toPixel(0.95, 0.387)), colour);
+  EXPECT_EQ(img.at<cv::Vec3b>(reliabilityFrame(1).toPixel(0.45, 0.25)), colour);
+  EXPECT_EQ(left.toPixel(1.0, 0.4), cv::Point(left.area.x + left.area.width, left.area.y));
 }
