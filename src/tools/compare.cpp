@@ -24,11 +24,15 @@ struct CompareOptions {
   size_t scans = 0;
   std::vector<std::string> sources{"onehot", "knn-vote", "confusion"};
   std::vector<std::string> protocols{"reconstruction", "held-out"};
-  std::vector<std::string> variants{"dempster",         "dempster-no-adaptive",
-                                    "dempster-no-threshold", "dempster-no-both",
-                                    "dempster-no-cap",  "dempster-centre",
+  std::vector<std::string> variants{"dempster",
+                                    "dempster-no-adaptive",
+                                    "dempster-no-threshold",
+                                    "dempster-no-both",
+                                    "dempster-no-cap",
+                                    "dempster-centre",
                                     "dempster-other-downsampling",
-                                    "reference_compat", "sbki",
+                                    "reference_compat",
+                                    "sbki",
                                     "ebs"};
   std::string rellis_data, rellis_classes;
   bool no_rellis = false;
@@ -41,7 +45,7 @@ struct CompareOptions {
   bool explicit_selection = false;  // --sources/--variants/--protocols given: full cross product
 };
 
-SemanticConfig variantConfig(const std::string& v, SemanticConfig c) {
+SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
   if (v == "dempster") {
     c.rule = "dempster";
   } else if (v == "dempster-no-adaptive") {
@@ -72,6 +76,55 @@ SemanticConfig variantConfig(const std::string& v, SemanticConfig c) {
   } else {
     throw std::invalid_argument("unknown variant '" + v + "'");
   }
+  return c;
+}
+
+// Sets one SemanticConfig field by name; false when the key or value is not usable.
+bool setParameter(const std::string& key, const std::string& value, SemanticConfig* c) {
+  if (key == "downsampling" || key == "kernel_distance") {
+    (key == "downsampling" ? c->downsampling : c->kernel_distance) = value;
+    return !value.empty();
+  }
+  const std::pair<const char*, double*> fields[] = {{"length_scale", &c->length_scale},
+                                                    {"sigma0", &c->sigma0},
+                                                    {"beta", &c->beta},
+                                                    {"gamma", &c->gamma},
+                                                    {"drop_percent", &c->drop_percent},
+                                                    {"evidence_cap", &c->evidence_cap},
+                                                    {"ds_multiplier", &c->ds_multiplier}};
+  for (const auto& [name, field] : fields) {
+    if (key != name) continue;
+    try {
+      size_t used = 0;
+      *field = std::stod(value, &used);
+      return used == value.size();
+    } catch (const std::exception&) {
+      return false;
+    }
+  }
+  return false;
+}
+
+// A variant is a named one, optionally followed by parameter overrides that make an ablation
+// row: "dempster:drop_percent=0:evidence_cap=2". Throws std::invalid_argument.
+SemanticConfig variantConfig(const std::string& variant, const SemanticConfig& base) {
+  std::vector<std::string> parts;
+  std::stringstream in(variant);
+  for (std::string part; std::getline(in, part, ':');) parts.push_back(part);
+  if (parts.empty()) throw std::invalid_argument("empty variant");
+  SemanticConfig c = namedVariantConfig(parts[0], base);
+  for (size_t i = 1; i < parts.size(); ++i) {
+    const size_t eq = parts[i].find('=');
+    const std::string key = parts[i].substr(0, eq);
+    const std::string value = eq == std::string::npos ? "" : parts[i].substr(eq + 1);
+    if (!setParameter(key, value, &c)) {
+      throw std::invalid_argument("variant '" + variant + "': cannot set '" + parts[i] +
+                                  "' (key=value of a numeric SemanticConfig field, or "
+                                  "downsampling / kernel_distance)");
+    }
+  }
+  const std::string problem = c.problem();
+  if (!problem.empty()) throw std::invalid_argument("variant '" + variant + "': " + problem);
   return c;
 }
 
@@ -127,7 +180,8 @@ std::string ablationMarks(const SemanticConfig& config) {
   const bool thr = dst || config.rule == "ebs";
   const bool adaptive = thr && config.effectiveGamma() != 0.0;
   return std::string(" ") + (thr ? (adaptive ? "✓" : "") : "–") + " | " +
-         (thr ? (config.uncertainty_threshold ? "✓" : "") : "–") + " |";
+         (thr ? (config.uncertainty_threshold && config.drop_percent > 0.0 ? "✓" : "") : "–") +
+         " |";
 }
 
 // Runs every variant and evidence source on one dataset/protocol; appends rows and JSON.
@@ -137,8 +191,8 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
                 const std::vector<std::string>& sources, const std::string& predictions_note,
                 std::vector<Section>* sections, nlohmann::json* json) {
   const Protocol protocol = makeProtocol(protocol_name, scans.size());
-  const std::vector<Query> queries = buildQueries(scans, protocol.query_scans,
-                                                  classes.ignore_class);
+  const std::vector<Query> queries =
+      buildQueries(scans, protocol.query_scans, classes.ignore_class);
   Section sec;
   std::ostringstream title;
   title << dataset_label << ", protocol **" << protocol.name << "**: map scans "
@@ -208,9 +262,8 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
                                  : 0.0;
       const std::string lead = "| " + source_name + " | " + v + " |" + ablationMarks(config);
       std::ostringstream row;
-      row << lead
-          << qualityCells(r.map.quality, r.map.semantic_coverage, r.map.occupancy_coverage) << " "
-          << fixed(median(r.ms_per_scan), 0) << " | " << percent(dropped) << " | "
+      row << lead << qualityCells(r.map.quality, r.map.semantic_coverage, r.map.occupancy_coverage)
+          << " " << fixed(median(r.ms_per_scan), 0) << " | " << percent(dropped) << " | "
           << lostClasses(r, classes) << " |";
       sec.rows.push_back(row.str());
       sec.detection_rows.push_back(lead + detectionCells(r.map.quality));
@@ -236,10 +289,10 @@ void runCompare(const CompareOptions& o) {
   if (with_model.evidence.learned_model.empty()) {
     with_model.evidence.learned_model = defaultLearnedModel(o.classes, classes);
   }
-  const std::string label = fs::path(o.data).filename().string() +
-                            (fs::path(o.data).filename().empty()
-                                 ? fs::path(o.data).parent_path().filename().string()
-                                 : "");
+  const std::string label =
+      fs::path(o.data).filename().string() +
+      (fs::path(o.data).filename().empty() ? fs::path(o.data).parent_path().filename().string()
+                                           : "");
   for (const std::string& p : o.protocols) {
     if (p == "held-out" && scans.size() < 2) continue;
     runSection(with_model, label, o.data, classes, scans, p, sources, "", &sections, &runs);
@@ -249,11 +302,10 @@ void runCompare(const CompareOptions& o) {
   if (!o.no_rellis) {
     std::string rdata = o.rellis_data, rclasses = o.rellis_classes;
     if (rdata.empty()) {
-      rdata = (fs::path(o.data).lexically_normal().parent_path() / "rellis3d_example_000104")
-                  .string();
+      rdata =
+          (fs::path(o.data).lexically_normal().parent_path() / "rellis3d_example_000104").string();
       if (fs::path(o.data).filename().empty()) {
-        rdata = (fs::path(o.data).parent_path().parent_path() / "rellis3d_example_000104")
-                    .string();
+        rdata = (fs::path(o.data).parent_path().parent_path() / "rellis3d_example_000104").string();
       }
     }
     if (rclasses.empty()) {
@@ -267,8 +319,9 @@ void runCompare(const CompareOptions& o) {
       std::vector<std::string> rsources;
       for (const auto& s : o.sources)
         if (s != "confusion" && s != "file" && s != "learned") rsources.push_back(s);
-      runSection(o, "RELLIS-3D " + fs::path(rdata).filename().string() +
-                        " (single scan, identity pose, SYNTHETIC predictions)",
+      runSection(o,
+                 "RELLIS-3D " + fs::path(rdata).filename().string() +
+                     " (single scan, identity pose, SYNTHETIC predictions)",
                  rdata, rtable, rscans, "reconstruction", rsources, o.noise.describe(), &sections,
                  &runs);
       sections.back().notes.push_back(
@@ -350,11 +403,19 @@ void addCompareCommand(CLI::App& app) {
   cmd->add_option("--variants", o->variants,
                   "dempster, dempster-no-adaptive, dempster-no-threshold, dempster-no-both, "
                   "dempster-no-cap, dempster-centre, dempster-other-downsampling, "
-                  "reference_compat, sbki, ebs")
+                  "reference_compat, sbki, ebs; each optionally with SemanticConfig overrides, "
+                  "e.g. dempster:drop_percent=0:evidence_cap=2 (an ablation row)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"dempster", "dempster-no-adaptive", "dempster-no-threshold",
-                             "dempster-no-both", "dempster-no-cap", "dempster-centre",
-                             "dempster-other-downsampling", "reference_compat", "sbki", "ebs"}))
+      ->check(CLI::Validator(
+          [](std::string& v) {
+            try {
+              variantConfig(v, SemanticConfig());
+              return std::string();
+            } catch (const std::exception& e) {
+              return std::string(e.what());
+            }
+          },
+          "VARIANT[:key=value...]"))
       ->capture_default_str();
   cmd->add_option("--rellis-data", o->rellis_data,
                   "RELLIS-3D scan directory (default: rellis3d_example_000104 beside --data)");

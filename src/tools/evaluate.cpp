@@ -21,6 +21,7 @@ struct EvalOptions {
   size_t scans = 0;
   bool synthetic = false;
   NoiseModel noise;
+  double evidence_cap = -1.0;  // < 0: the map's own
 };
 
 void runEval(const EvalOptions& o) {
@@ -28,8 +29,12 @@ void runEval(const EvalOptions& o) {
   const ClassTable classes = ClassTable::load(o.classes);
   if (classes.numClasses() != tree->numClasses()) {
     throw std::runtime_error(o.classes + " has " + std::to_string(classes.numClasses()) +
-                             " classes, " + o.map + " has " +
-                             std::to_string(tree->numClasses()));
+                             " classes, " + o.map + " has " + std::to_string(tree->numClasses()));
+  }
+  if (o.evidence_cap >= 0.0) {  // only the read-out changes: the stored evidence is the same
+    SemanticConfig config = tree->config();
+    config.evidence_cap = o.evidence_cap;
+    tree->setConfig(config);
   }
   EvidenceOptions ev = o.evidence;
   finishEvidenceOptions(o.evidence_name, o.classes, classes, &ev);
@@ -85,8 +90,9 @@ void runEval(const EvalOptions& o) {
 void addEvalCommand(CLI::App& app) {
   auto o = std::make_shared<EvalOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "eval", "Metrics of a saved map on a dataset's GT-labelled points: O.Acc, per-class IoU, "
-              "mIoU, Acc, Brier score, and the input predictions' per-point metrics");
+      "eval",
+      "Metrics of a saved map on a dataset's GT-labelled points: O.Acc, per-class IoU, "
+      "mIoU, Acc, Brier score, and the input predictions' per-point metrics");
   cmd->add_option("--map", o->map, "Map (.ot)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--data", o->data, "Dataset directory (or a single .bin scan)")
       ->required()
@@ -104,6 +110,9 @@ void addEvalCommand(CLI::App& app) {
   addEvidenceOptions(cmd, &o->evidence, &o->evidence_name);
   cmd->add_option("--evidence-note", o->evidence_note,
                   "What evidence the map was built from (printed in the outputs)");
+  cmd->add_option("--evidence-cap", o->evidence_cap,
+                  "dempster: read the opinions with this evidence cap instead of the map's own "
+                  "(0: no cap); the stored evidence is unchanged");
   cmd->add_flag("--synthetic-predictions", o->synthetic,
                 "Input predictions = GT with the synthetic noise model (as `map`)");
   cmd->add_option("--noise-point-rate", o->noise.point_rate, "Synthetic point-noise rate")

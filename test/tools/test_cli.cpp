@@ -1,7 +1,8 @@
 // End to end: the `evidential_octomap` binary on 2 bundled scans, checked against a second,
 // independent computation of the metrics in this file (own file parsing, own pose, own loops).
 #include <gtest/gtest.h>
-
+#include <octomap/AbstractOcTree.h>
+#include <octomap/ColorOcTree.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,15 +12,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <random>
-#include <thread>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <octomap/AbstractOcTree.h>
-#include <octomap/ColorOcTree.h>
+#include <random>
 #include <sstream>
+#include <thread>
 
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
@@ -197,8 +196,7 @@ TEST_F(CliEndToEnd, MetricsJsonIsLabelledAndInRange) {
 
 TEST_F(CliEndToEnd, MetricsEqualAnIndependentComputation) {
   ASSERT_EQ(map_result_.status, 0) << map_result_.output;
-  std::unique_ptr<octomap::AbstractOcTree> any(
-      octomap::AbstractOcTree::read(out_ + "/map/map.ot"));
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(out_ + "/map/map.ot"));
   auto* tree = dynamic_cast<EvidentialOcTree*>(any.get());
   ASSERT_NE(tree, nullptr);
   const ClassTable classes = ClassTable::load(kittiClasses());
@@ -228,16 +226,39 @@ TEST_F(CliEndToEnd, InfoReadsTheMapBack) {
 
 TEST_F(CliEndToEnd, EvalOfTheSavedMapReproducesTheMetrics) {
   ASSERT_EQ(map_result_.status, 0) << map_result_.output;
-  const Result r = run("eval --map " + out_ + "/map/map.ot --data " + kittiDir() +
-                       " --classes " + kittiClasses() + " --scans 2 --out " + out_ + "/eval");
+  const Result r = run("eval --map " + out_ + "/map/map.ot --data " + kittiDir() + " --classes " +
+                       kittiClasses() + " --scans 2 --out " + out_ + "/eval");
   ASSERT_EQ(r.status, 0) << r.output;
   const auto a = readJson(out_ + "/map/metrics.json"), b = readJson(out_ + "/eval/metrics.json");
-  for (const char* k : {"queries", "labelled", "occupied", "semantic_coverage",
-                        "miou_all_queries", "acc_all_queries", "brier", "nll", "ece",
-                        "error_detection"}) {
+  for (const char* k : {"queries", "labelled", "occupied", "semantic_coverage", "miou_all_queries",
+                        "acc_all_queries", "brier", "nll", "ece", "error_detection"}) {
     EXPECT_EQ(a["map"][k], b["map"][k]) << k;
   }
   EXPECT_EQ(a["input"], b["input"]);
+}
+
+// eval --evidence-cap reads the stored evidence with another cap: the Brier score is the
+// independent recomputation's at that cap; labels, coverage and accuracy do not move.
+TEST_F(CliEndToEnd, EvalWithAnotherEvidenceCapChangesOnlyTheReadOut) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  const Result r =
+      run("eval --map " + out_ + "/map/map.ot --data " + kittiDir() + " --classes " +
+          kittiClasses() + " --scans 2 --evidence-cap 0 --out " + out_ + "/eval_nocap");
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(out_ + "/map/map.ot"));
+  auto* tree = dynamic_cast<EvidentialOcTree*>(any.get());
+  ASSERT_NE(tree, nullptr);
+  evidential_octomap::SemanticConfig uncapped = tree->config();
+  uncapped.evidence_cap = 0.0;
+  tree->setConfig(uncapped);
+  const Independent ind = recompute(*tree, ClassTable::load(kittiClasses()));
+  const auto a = readJson(out_ + "/map/metrics.json"),
+             b = readJson(out_ + "/eval_nocap/metrics.json");
+  EXPECT_NEAR(double(b["map"]["brier"]), ind.brier, 1e-6);
+  EXPECT_GT(std::fabs(double(a["map"]["brier"]) - double(b["map"]["brier"])), 1e-4);
+  for (const char* k : {"labelled", "semantic_coverage", "acc_all_queries", "miou_all_queries"}) {
+    EXPECT_EQ(a["map"][k], b["map"][k]) << k;
+  }
 }
 
 TEST_F(CliEndToEnd, ExportAndMergeWriteReadableMaps) {
@@ -263,12 +284,12 @@ TEST_F(CliEndToEnd, ExportKilledAtAnyMomentLeavesTheOldFileWhole) {
   const std::string args_map = out_ + "/map/map.ot";
   const std::string classes = kittiClasses();
   auto exportArgs = [&] {
-    return std::vector<std::string>{EVIDENTIAL_TEST_CLI, "export", "--map", args_map,
-                                    "--classes", classes, "--color-octree", color};
+    return std::vector<std::string>{EVIDENTIAL_TEST_CLI, "export", "--map",          args_map,
+                                    "--classes",         classes,  "--color-octree", color};
   };
   const auto t0 = std::chrono::steady_clock::now();
-  Result first = run("export --map " + args_map + " --classes " + classes + " --color-octree " +
-                     color);
+  Result first =
+      run("export --map " + args_map + " --classes " + classes + " --color-octree " + color);
   ASSERT_EQ(first.status, 0) << first.output;
   const double export_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -316,8 +337,8 @@ TEST(CliErrors, BadLabelFileIsNamed) {
   writeBinary(dir + "/predictions/000000.label", std::vector<uint32_t>(10, 12345));
   fs::copy_file(kittiDir() + "/calib.txt", dir + "/calib.txt");
   std::ofstream(dir + "/poses.txt") << "1 0 0 0 0 1 0 0 0 0 1 0\n";
-  const Result r = run("map --quiet --data " + dir + " --classes " + kittiClasses() + " --out " +
-                       dir + "/out");
+  const Result r =
+      run("map --quiet --data " + dir + " --classes " + kittiClasses() + " --out " + dir + "/out");
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.output.find("predictions/000000.label"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("12345"), std::string::npos) << r.output;
@@ -329,6 +350,26 @@ TEST(CliErrors, EverySubcommandHasHelp) {
     EXPECT_EQ(r.status, 0) << c;
     EXPECT_NE(r.output.find("Usage:"), std::string::npos) << c;
   }
+}
+
+// A compare variant with overrides is an ablation row whose config holds the overrides;
+// an unknown field is refused before anything runs.
+TEST(CliCompare, VariantOverridesMakeAnAblationRow) {
+  const std::string dir = freshDir("cli_compare_variant");
+  const Result bad = run("compare --data " + kittiDir() + " --classes " + kittiClasses() +
+                         " --variants dempster:no_such_field=1 --out " + dir);
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.output.find("no_such_field"), std::string::npos) << bad.output;
+  const Result r =
+      run("compare -q --no-rellis --scans 1 --sources onehot --protocols "
+          "reconstruction --variants dempster:drop_percent=0:evidence_cap=2 --data " +
+          kittiDir() + " --classes " + kittiClasses() + " --out " + dir);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto runs = readJson(dir + "/compare.json")["runs"];
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_EQ(runs[0]["variant_id"], "dempster:drop_percent=0:evidence_cap=2");
+  EXPECT_EQ(double(runs[0]["parameters"]["drop_percent"]), 0.0);
+  EXPECT_EQ(double(runs[0]["parameters"]["evidence_cap"]), 2.0);
 }
 
 TEST(CliRellis, WithoutPredictionsAsksForSyntheticOnes) {
