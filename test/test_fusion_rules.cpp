@@ -308,6 +308,7 @@ TEST(DempsterRule, IntegratedScansAgreeWithBeliefSpaceInBothOrders) {
   const int num_classes = 4;
   RandomMasses rnd(300);
   SemanticConfig config = uncappedDempster();
+  config.adaptive_length = true;         // the expected supports below are adaptive
   config.uncertainty_threshold = false;  // one point per scan: nothing to drop
   config.ds_multiplier = 0.0;            // keep the point exactly where it is
   config.kernel_creates_leaves = true;   // the voxel above is unknown space

@@ -562,6 +562,7 @@ TEST(KernelSettings, UncertainPointsHaveShortSupportUnlessReferenceCompat) {
   // reference_compat (gamma = 0): L = 0.3 e ~ 0.815 m: 0.5 m (3 above) in, 0.9 m (5 above) out.
   const std::vector<float> weak{0.2f, 0.0f, 0.0f};
   SemanticConfig adaptive, compat;
+  adaptive.adaptive_length = true;
   adaptive.uncertainty_threshold = compat.uncertainty_threshold = false;
   adaptive.ds_multiplier = compat.ds_multiplier = 0.0;
   compat.reference_compat = true;
@@ -632,6 +633,7 @@ TEST(KernelSettings, PointAlwaysReachesItsOwnVoxel) {
   octomap::Pointcloud points;
   points.push_back(0.01f, 0.01f, 0.01f);
   SemanticConfig voxel, centre;
+  voxel.adaptive_length = centre.adaptive_length = true;  // the short support of a weak point
   voxel.ds_multiplier = centre.ds_multiplier = 0.0;
   voxel.uncertainty_threshold = centre.uncertainty_threshold = false;
   centre.kernel_distance = "centre";
@@ -648,6 +650,7 @@ TEST(KernelSettings, PointAlwaysReachesItsOwnVoxel) {
 TEST(ScanIntegration, DownSamplingMergesPointsOfOneCell) {
   // ds_multiplier 5 at 0.2 m: a 0.04 m grid. Ten points inside one cell are one semantic point.
   SemanticConfig config;
+  config.downsampling = "average";
   EvidentialOcTree tree(0.2, 2, config);
   octomap::Pointcloud points;
   std::vector<float> evidence;
@@ -760,6 +763,7 @@ TEST(PercentileThreshold, DropsTheMostUncertainPsiPercent) {
   const int num_classes = scene.num_classes;
   for (double psi : {10.0, 30.0}) {
     SemanticConfig config;
+    config.uncertainty_threshold = true;
     config.ds_multiplier = 0.0;  // every point takes part in the semantic pass
     config.drop_percent = psi;
     EvidentialOcTree tree(0.2, num_classes, config);
@@ -796,6 +800,7 @@ TEST(PercentileThreshold, OffOrZeroOrSbkiDropsNothing) {
   const SyntheticScan scan = scene.defaultScan();
   SemanticConfig off, zero, sbki;
   off.uncertainty_threshold = false;
+  zero.uncertainty_threshold = sbki.uncertainty_threshold = true;
   zero.drop_percent = 0.0;
   sbki.rule = "sbki";
   for (const SemanticConfig& config : {off, zero, sbki}) {
@@ -809,6 +814,7 @@ TEST(PercentileThreshold, OffOrZeroOrSbkiDropsNothing) {
 TEST(PercentileThreshold, DroppedPointsLeaveNoEvidence) {
   // Two far-apart points; the more uncertain one is dropped at psi = 50.
   SemanticConfig config;
+  config.uncertainty_threshold = true;
   config.drop_percent = 50.0;
   config.ds_multiplier = 0.0;
   EvidentialOcTree tree(0.2, 2, config);

@@ -143,7 +143,7 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   timer = PhaseTimer();
   const bool uncertainty_kernel = tree->rule().usesUncertaintyKernel();
   selectSemanticPoints(raw, num_classes, config_,
-                       uncertainty_kernel && config_.uncertainty_threshold, tree->getResolution(),
+                       uncertainty_kernel && config_.effectiveThreshold(), tree->getResolution(),
                        threads, &scratch.semantic, &scratch.points, &stats);
   stats.semantic_points = scratch.points.positions.size();
   const KernelPass kernel(config_, *tree);

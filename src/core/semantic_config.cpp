@@ -81,7 +81,8 @@ void SemanticConfig::print(std::ostream& out) const {
       << "gamma: " << gamma << (effectiveGamma() != gamma ? " (0 used)" : "") << "\n"
       << "drop_percent: " << drop_percent << "\n"
       << "adaptive_length: " << (adaptive_length ? "true" : "false") << "\n"
-      << "uncertainty_threshold: " << (uncertainty_threshold ? "true" : "false") << "\n"
+      << "uncertainty_threshold: " << (uncertainty_threshold ? "true" : "false")
+      << (effectiveThreshold() != uncertainty_threshold ? " (on: reference_compat)" : "") << "\n"
       << "reference_compat: " << (reference_compat ? "true" : "false") << "\n"
       << "sbki_prior: " << sbki_prior << "\n"
       << "evidence_cap: " << evidence_cap << "\n"

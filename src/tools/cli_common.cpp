@@ -18,13 +18,17 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
   cmd->add_option("--drop-percent", c->drop_percent,
                   "Percentage psi of the most uncertain points dropped per scan")
       ->capture_default_str();
-  cmd->add_flag("!--no-adaptive-length", c->adaptive_length,
-                "No adaptive length: gamma = 0, support l*beta*e (Table II ablation)");
-  cmd->add_flag("!--no-threshold", c->uncertainty_threshold,
-                "Keep the most uncertain points too (Table II ablation)");
+  cmd->add_flag("--adaptive-length,!--no-adaptive-length", c->adaptive_length,
+                "The paper's adaptive support l*beta*e^(1-gamma u) (default off: gamma = 0, "
+                "support l*beta*e; Table II ablation)")
+      ->capture_default_str();
+  cmd->add_flag("--threshold,!--no-threshold", c->uncertainty_threshold,
+                "The paper's percentile threshold: drop the --drop-percent most uncertain "
+                "points of each scan (default off; Table II ablation)")
+      ->capture_default_str();
   cmd->add_flag("--reference-compat", c->reference_compat,
-                "The authors' released configuration: gamma = 0 (support l*beta*e) and "
-                "count-cap down-sampling");
+                "The authors' released configuration: gamma = 0 (support l*beta*e), count-cap "
+                "down-sampling and the percentile threshold");
   cmd->add_option("--sbki-prior", c->sbki_prior, "S-BKI prior alpha0")->capture_default_str();
   cmd->add_option("--evidence-cap", c->evidence_cap,
                   "dempster: read opinions with the fused log-evidence capped here (0: no cap)")
@@ -108,8 +112,8 @@ std::string variantName(const SemanticConfig& c) {
   std::string v = c.rule;
   if (c.rule == "dempster") {
     if (c.reference_compat) v += " reference_compat (gamma=0, count cap)";
-    if (!c.adaptive_length) v += " w/o adaptive length";
-    if (!c.uncertainty_threshold) v += " w/o threshold";
+    if (c.adaptive_length && !c.reference_compat) v += " + adaptive length";
+    if (c.uncertainty_threshold && !c.reference_compat) v += " + threshold";
     if (!(c.evidence_cap > 0.0)) v += " w/o evidence cap";
     if (c.kernel_distance != SemanticConfig().kernel_distance) v += " kernel distance " + c.kernel_distance;
     if (c.downsampling != SemanticConfig().downsampling && !c.reference_compat) v += " " + c.downsampling;

@@ -57,6 +57,7 @@ nlohmann::json configJson(const SemanticConfig& config) {
     j[key] = scalarFromText(value);
   }
   j["effective_gamma"] = config.effectiveGamma();
+  j["effective_threshold"] = config.effectiveThreshold();
   j["effective_downsampling"] = config.effectiveDownsampling();
   return j;
 }
