@@ -1,11 +1,11 @@
 #include "pipeline.h"
 
+#include <octomap/OcTree.h>
+
 #include <algorithm>
 #include <chrono>
 #include <numeric>
 #include <stdexcept>
-
-#include <octomap/OcTree.h>
 
 #include "evidence_calibration.h"
 #include "progress_bar.h"
@@ -15,8 +15,8 @@ namespace evidential_octomap::tools {
 std::string useSyntheticPredictions(std::vector<Scan>* scans, const ClassTable& classes,
                                     const NoiseModel& noise) {
   for (Scan& s : *scans) {
-    s.predicted = syntheticPredictions(s.points_S, s.gt, classes.numClasses(),
-                                       classes.ignore_class, noise);
+    s.predicted =
+        syntheticPredictions(s.points_S, s.gt, classes.numClasses(), classes.ignore_class, noise);
   }
   return noise.describe();
 }
@@ -69,9 +69,11 @@ std::vector<Query> buildQueries(const std::vector<Scan>& scans, const std::vecto
     for (size_t i = 0; i < scan.size(); ++i) {
       if (scan.gt[i] < 0 || scan.gt[i] == ignore_class) continue;
       const Eigen::Vector3f p = scan.pointW(i);
-      queries.push_back({octomap::point3d(p.x(), p.y(), p.z()), scan.gt[i],
-                         has_pred ? scan.predicted[i] : -1});
-      if (e) query_evidence->insert(query_evidence->end(), e + i * num_classes, e + (i + 1) * num_classes);
+      queries.push_back(
+          {octomap::point3d(p.x(), p.y(), p.z()), scan.gt[i], has_pred ? scan.predicted[i] : -1});
+      if (e)
+        query_evidence->insert(query_evidence->end(), e + i * num_classes,
+                               e + (i + 1) * num_classes);
     }
   }
   return queries;
@@ -86,7 +88,8 @@ std::vector<octomap::OcTreeKey> endpointKeys(const std::vector<Scan>& scans,
     for (size_t i = 0; i < scan.size(); ++i) {
       const Eigen::Vector3f p = scan.pointW(i);
       octomap::OcTreeKey key;
-      if (keys_of.coordToKeyChecked(octomap::point3d(p.x(), p.y(), p.z()), key)) keys.push_back(key);
+      if (keys_of.coordToKeyChecked(octomap::point3d(p.x(), p.y(), p.z()), key))
+        keys.push_back(key);
     }
   }
   return keys;
@@ -111,8 +114,8 @@ std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans
   }
   std::unique_ptr<LearnedEvidenceModel> learned;
   if (options.source == EvidenceSource::kLearned) {
-    learned = std::make_unique<LearnedEvidenceModel>(
-        LearnedEvidenceModel::load(options.learned_model));
+    learned =
+        std::make_unique<LearnedEvidenceModel>(LearnedEvidenceModel::load(options.learned_model));
   }
   std::vector<std::vector<float>> evidence(scans.size());
   for (size_t s : which) {
@@ -127,9 +130,12 @@ std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans
     EvidenceCalibration calibration(C, classes.ignore_class);
     for (size_t s : which) {
       if (scans.at(s).gt.size() != scans.at(s).size()) {
-        throw std::runtime_error("calibrating derived evidence needs GT labels of the mapping "
-                                 "scans, scan " + scans.at(s).name + " has none (use "
-                                 "--no-calibration)");
+        throw std::runtime_error(
+            "calibrating derived evidence needs GT labels of the mapping "
+            "scans, scan " +
+            scans.at(s).name +
+            " has none (use "
+            "--no-calibration)");
       }
       calibration.addScan(s, evidence[s], scans.at(s).gt);
     }
@@ -181,6 +187,9 @@ MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& whi
     t.ms_occupancy += st.ms_occupancy;
     t.ms_kernel += st.ms_kernel;
     t.ms_update += st.ms_update;
+    t.cpu_ms_occupancy += st.cpu_ms_occupancy;
+    t.cpu_ms_kernel += st.cpu_ms_kernel;
+    t.cpu_ms_update += st.cpu_ms_update;
     bar.tick();
   }
   return run;
