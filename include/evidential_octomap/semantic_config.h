@@ -22,7 +22,8 @@ struct SemanticConfig {
   // l * beta * e^(1 - gamma u) (off: gamma = 0, support l * beta * e for every point) and the
   // per-scan percentile threshold. Both are OFF by default, chosen by measurement
   // (docs/results.md, "defaults"): on the bundled sequence each one lowers mIoU and raises the
-  // Brier score with every evidence source. The threshold drops a scan's most uncertain points,
+  // Brier score with learned and knn-vote evidence (with one-hot evidence every point has the
+  // same u and the threshold drops nothing). The threshold drops a scan's most uncertain points,
   // which are mostly rare-class and far points (learned evidence: bicycle and parking vanish),
   // and the adaptive length shortens exactly the supports that need neighbours' support most.
   // The uncertainty still acts: it weighs every contribution through the extended belief.
