@@ -3,6 +3,7 @@
 // threshold, leaf creation, and the three fusion rules through one integrator.
 #include <gtest/gtest.h>
 #include <octomap/octomap.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -731,7 +732,8 @@ TEST(ScanIntegration, HugeEvidenceInOneCellStaysFiniteAndLoadable) {
     ASSERT_NE(payload, nullptr) << mode;
     for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(payload[c])) << mode << " class " << c;
     EXPECT_EQ(tree.query(octomap::point3d(2.1f, 1.0f, 0.5f)).label, 0) << mode;
-    const std::string path = ::testing::TempDir() + "/huge_evidence_" + mode + ".ot";
+    const std::string path =
+        ::testing::TempDir() + "/huge_evidence_" + mode + "_" + std::to_string(::getpid()) + ".ot";
     saveMap(tree, path);
     const auto loaded = loadMap(path);
     EXPECT_EQ(loaded->query(octomap::point3d(2.1f, 1.0f, 0.5f)).label, 0) << mode;

@@ -1,8 +1,8 @@
 // .npy writer (format 1.0): magic, version, a header dict padded to a multiple of 64 bytes, data.
-#include <fstream>
-#include <stdexcept>
+#include <ostream>
 
 #include "dataset.h"
+#include "evidential_octomap/io.h"
 
 namespace evidential_octomap::tools {
 
@@ -15,15 +15,16 @@ void writeNpyBytes(const std::string& path, const char* descr, const void* data,
   const size_t unpadded = 10 + header.size() + 1;  // magic + version + length, header, '\n'
   header.append((64 - unpadded % 64) % 64, ' ');
   header.push_back('\n');
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw std::runtime_error(path + ": cannot open for writing");
-  const uint16_t len = uint16_t(header.size());
-  out.write("\x93NUMPY\x01\x00", 8);
-  const char len_bytes[2] = {char(len & 0xFF), char(len >> 8)};
-  out.write(len_bytes, 2);
-  out.write(header.data(), std::streamsize(header.size()));
-  out.write(static_cast<const char*>(data), std::streamsize(rows * cols * item));
-  if (!out) throw std::runtime_error(path + ": write failed");
+  // Atomic like every file we write: a killed run leaves the previous file or the new one.
+  writeFileAtomically(path, [&](std::ostream& out) {
+    const uint16_t len = uint16_t(header.size());
+    out.write("\x93NUMPY\x01\x00", 8);
+    const char len_bytes[2] = {char(len & 0xFF), char(len >> 8)};
+    out.write(len_bytes, 2);
+    out.write(header.data(), std::streamsize(header.size()));
+    out.write(static_cast<const char*>(data), std::streamsize(rows * cols * item));
+    return out.good();
+  });
 }
 
 }  // namespace

@@ -183,9 +183,9 @@ TEST_F(NodeReliabilityTest, ClearBbxRefusesNonFiniteAndInvertedBoxes) {
   mapTheWall();
   const auto before = snapshot();
   const std::pair<geometry_msgs::Point, geometry_msgs::Point> boxes[] = {
-      {gp(4.0, -3.0, -1.0), gp(kNaN, kNaN, kNaN)},       // cleared the wall before
-      {gp(-1000, -1000, -1000), gp(kNaN, 1000, 1000)},   // cleared the whole map before
-      {gp(6.0, 3.0, 2.0), gp(4.0, -3.0, -1.0)},          // inverted
+      {gp(4.0, -3.0, -1.0), gp(kNaN, kNaN, kNaN)},      // cleared the wall before
+      {gp(-1000, -1000, -1000), gp(kNaN, 1000, 1000)},  // cleared the whole map before
+      {gp(6.0, 3.0, 2.0), gp(4.0, -3.0, -1.0)},         // inverted
       {gp(4.0, -3.0, -1.0), gp(INFINITY, 3.0, 2.0)}};
   for (const auto& [min, max] : boxes) {
     eo::ClearBbx srv;  // ~clear_box replies with the reason
@@ -258,6 +258,23 @@ TEST_F(NodeReliabilityTest, UnaffordableKernelIsRefusedAndMappingGoesOn) {
   EXPECT_TRUE(waitFor([&] { return logSays("reconfigure refused"); }));
   // With the huge kernel a 16-point cloud took minutes; with the values in use it is mapped.
   mapTheWall();
+}
+
+TEST_F(NodeReliabilityTest, WidestAffordableKernelWithLabelEvidence1000MapsAndGoesOn) {
+  // Issue 16 item 4: label_evidence 1000 (the slider's end) makes every labelled point certain,
+  // so each reaches the kernel's widest support; with a kernel inside the old ranges the node
+  // died of std::bad_alloc. The widest kernel the bound admits (l * beta * e = 1.90 m, 9.5
+  // leaves at 0.2 m) with that evidence maps the wall and leaves the node answering.
+  const auto in_use = setDoubles({});
+  const auto config =
+      setDoubles({{"label_evidence", 1000.0}, {"length_scale", 0.7}, {"beta", 1.0}});
+  EXPECT_DOUBLE_EQ(valueOf(config, "label_evidence"), 1000.0);
+  EXPECT_DOUBLE_EQ(valueOf(config, "length_scale"), 0.7) << "the bound refused a kernel it admits";
+  mapTheWall();
+  EXPECT_LT(query({gp(5.05, 0.0, 0.75)}).uncertainties.at(0), 0.05f);
+  setDoubles({{"label_evidence", valueOf(in_use, "label_evidence")},
+              {"length_scale", valueOf(in_use, "length_scale")},
+              {"beta", valueOf(in_use, "beta")}});
 }
 
 TEST_F(NodeReliabilityTest, SensorModelAtTheSliderEndsGivesAMapThatLoads) {

@@ -392,3 +392,23 @@ TEST(CliRellis, SyntheticPredictionsAreLabelledInTheOutputs) {
   EXPECT_GT(input_acc, 0.75);  // about 1 - point rate - region rate
   EXPECT_LT(input_acc, 0.95);
 }
+
+// Issue 16 item 11: ctest -j2 runs several of these processes at once; each must get its own
+// output directory (the CliEndToEnd suite once shared one and a concurrent run deleted it).
+TEST(TestIsolation, ConcurrentProcessesNeverShareOrDeleteAFreshDirectory) {
+  const std::string mine = freshDir("isolation");
+  std::ofstream(mine + "/marker") << "mine";
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {  // another test process making "the same" directory
+    const std::string theirs = freshDir("isolation");
+    const bool shared = theirs == mine;
+    std::error_code ec;
+    fs::remove_all(theirs, ec);
+    ::_exit(shared ? 1 : 0);  // no atexit handlers: they belong to the parent's copy
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "both processes got " << mine;
+  EXPECT_TRUE(fs::exists(mine + "/marker")) << "another process deleted " << mine;
+}

@@ -1,12 +1,18 @@
 #include <gtest/gtest.h>
-
-#include <cmath>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <Eigen/LU>
+#include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <random>
 #include <sstream>
+#include <thread>
+#include <vector>
 
 #include "dataset.h"
 #include "test_helpers.h"
@@ -17,6 +23,7 @@ using evidential_octomap::LogitTransform;
 using evidential_octomap::tools::Dataset;
 using evidential_octomap::tools::InputConversion;
 using evidential_octomap::tools::readFloatMatrix;
+using evidential_octomap::tools::writeNpy;
 using namespace tools_test;
 
 namespace {
@@ -95,8 +102,8 @@ TEST(RellisReader, SinglePoselessScanDropsNoReturnPoints) {
   EXPECT_EQ(d.layout(), Dataset::Layout::kSingleScan);
   EXPECT_TRUE(d.pose(0).isIdentity());
   const auto scan = d.load(0);
-  EXPECT_EQ(scan.size(), 77708u);              // README: 77 708 valid
-  EXPECT_EQ(scan.dropped_no_return, 53364u);   // README: 53 364 zero points
+  EXPECT_EQ(scan.size(), 77708u);             // README: 77 708 valid
+  EXPECT_EQ(scan.dropped_no_return, 53364u);  // README: 53 364 zero points
   EXPECT_TRUE(scan.predicted.empty());
   // README label counts (every zero point is void, so the others keep their counts).
   std::vector<size_t> count(classes.numClasses(), 0);
@@ -239,4 +246,31 @@ TEST(FloatMatrixReader, ReadsNpyVersion1) {
   ASSERT_EQ(m.size(), 6u);
   EXPECT_FLOAT_EQ(m[5], 5.0f);
   EXPECT_THROW(readFloatMatrix(dir + "/e.npy", 3, 3), std::runtime_error);
+}
+
+// Issue 16 item 9 (every writer atomic): kill -9 at random moments of a `features` .npy write
+// leaves the previous file whole (written in place, a kill mid-write left a torn file).
+TEST(NpyWriter, KilledAtAnyMomentLeavesTheOldFileWhole) {
+  const std::string path = freshDir("npy_kill") + "/f.npy";
+  const size_t rows = 1 << 18, cols = 4;
+  const std::vector<float> old_values(rows * cols, 1.0f), new_values(rows * cols, 2.0f);
+  const auto t0 = std::chrono::steady_clock::now();
+  writeNpy(path, old_values.data(), rows, cols);
+  const double write_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> delay(0.0, 2.0 * write_ms);
+  for (int trial = 0; trial < 8; ++trial) {
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      for (;;) writeNpy(path, new_values.data(), rows, cols);
+    }
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay(rng)));
+    ::kill(pid, SIGKILL);
+    ASSERT_EQ(::waitpid(pid, nullptr, 0), pid);
+    const std::vector<float> read = readFloatMatrix(path, rows, cols);  // throws when torn
+    ASSERT_EQ(read.size(), rows * cols) << "trial " << trial;
+    EXPECT_TRUE(read == old_values || read == new_values) << "trial " << trial << ": mixed file";
+  }
 }

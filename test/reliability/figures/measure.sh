@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The before/after figures of issue 16 in docs/reliability.md: builds the core library of a
-# commit (git archive, plain CMake, Release) and the small programs here against it, then runs
-# them. OLD=1 selects the code paths that commit had before the fixes (export writing in place,
-# clearBox in src/ros). Run from the repository root:
-#   bash test/reliability/figures/measure.sh 850b489 OLD=1    # before
+# The before/after figures of issue 16 (items 1, 2, 3, 4, 6, 8, 9, 10) in docs/reliability.md:
+# builds the core library of a commit (git archive, plain CMake, Release) and the small programs
+# here against it, then runs them. OLD=1 (-DOLD_WRITERS) selects the code paths that commit had
+# before the fixes (export writing in place, clearBox in src/ros, payload += float(increment)).
+# Run from the repository root:
+#   bash test/reliability/figures/measure.sh 66817db OLD=1    # before (main when #16 was filed)
 #   bash test/reliability/figures/measure.sh HEAD              # after
 set -euo pipefail
 commit="$1"
@@ -27,6 +28,9 @@ fi
 "${cxx[@]}" "${defs[@]}" "${clear_sources[@]}" "${libs[@]}" -o "${out}/clear_nan"
 "${cxx[@]}" "${defs[@]}" "${here}/writer_trials.cpp" "${libs[@]}" -o "${out}/writer_trials"
 "${cxx[@]}" "${here}/load_path.cpp" "${libs[@]}" -o "${out}/load_path"
+for program in huge_evidence sensor_grid kernel_cost absorption; do
+  "${cxx[@]}" "${defs[@]}" "${here}/${program}.cpp" "${libs[@]}" -o "${out}/${program}"
+done
 # The mutation outcomes need that commit's seed writer and fuzz targets (formats differ).
 reseal=()
 grep -q resealOtChecksum "${out}/src/fuzz/fuzz_targets.h" || reseal=(-DEVIDENTIAL_NO_RESEAL)
@@ -36,6 +40,12 @@ grep -q resealOtChecksum "${out}/src/fuzz/fuzz_targets.h" || reseal=(-DEVIDENTIA
 
 cd "${out}/run"
 echo "== ${commit} ${old} (load $(cut -d' ' -f1-3 /proc/loadavg))"
+"${out}/huge_evidence" 2>/dev/null
+"${out}/sensor_grid" 2>/dev/null
+# Before the bound this setting ran for minutes and took gigabytes: stop it at 30 s and 4 GB.
+(ulimit -v 4000000; /usr/bin/time -f "  wall %e s, CPU %U s, max RSS %M KB" timeout 30 \
+  "${out}/kernel_cost") || echo "  (kernel: not finished after 30 s, or over 4 GB)"
+"${out}/absorption"
 "${out}/clear_nan"
 rm -rf w && mkdir w && "${out}/writer_trials" threads w
 rm -rf w && mkdir w && "${out}/writer_trials" export w 50
