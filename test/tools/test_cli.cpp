@@ -298,19 +298,13 @@ TEST_F(CliEndToEnd, ExportKilledAtAnyMomentLeavesTheOldFileWhole) {
   std::mt19937 rng(16);
   std::uniform_real_distribution<double> delay(0.0, 1.2 * export_ms);
   for (int trial = 0; trial < 8; ++trial) {
-    const pid_t pid = ::fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
+    ASSERT_TRUE(killedAfter(delay(rng), [&] {
       std::vector<std::string> args = exportArgs();
       std::vector<char*> argv;
       for (auto& a : args) argv.push_back(&a[0]);
       argv.push_back(nullptr);
       ::execv(argv[0], argv.data());
-      ::_exit(127);
-    }
-    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay(rng)));
-    ::kill(pid, SIGKILL);
-    ASSERT_EQ(::waitpid(pid, nullptr, 0), pid);
+    }));
     std::ifstream after_in(color, std::ios::binary);
     const std::string after((std::istreambuf_iterator<char>(after_in)),
                             std::istreambuf_iterator<char>());

@@ -1,12 +1,17 @@
 // Shared by the tool tests: paths (CMake-defined) and temporary directories.
 #pragma once
 
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace tools_test {
@@ -31,18 +36,33 @@ inline std::string freshDir(const std::string& name) {
       for (const auto& p : made) std::filesystem::remove_all(p, ec);
     });
   }
-  const std::filesystem::path p = std::filesystem::path(EVIDENTIAL_TEST_TMP_DIR) /
-                                  (name + "." + std::to_string(::getpid()));
+  const std::filesystem::path p =
+      std::filesystem::path(EVIDENTIAL_TEST_TMP_DIR) / (name + "." + std::to_string(::getpid()));
   std::filesystem::remove_all(p);
   std::filesystem::create_directories(p);
   made.push_back(p);
   return p.string();
 }
 
+// Runs `child` (it must not return: loop or exec) in a forked process and kills it with SIGKILL
+// after `delay_ms`: a writer killed at that moment. Returns false when fork or wait failed.
+inline bool killedAfter(double delay_ms, const std::function<void()>& child) {
+  const pid_t pid = ::fork();
+  if (pid < 0) return false;
+  if (pid == 0) {
+    child();
+    ::_exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay_ms));
+  ::kill(pid, SIGKILL);
+  return ::waitpid(pid, nullptr, 0) == pid;
+}
+
 template <typename T>
 void writeBinary(const std::string& path, const std::vector<T>& values) {
   std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(values.data()), std::streamsize(values.size() * sizeof(T)));
+  out.write(reinterpret_cast<const char*>(values.data()),
+            std::streamsize(values.size() * sizeof(T)));
 }
 
 }  // namespace tools_test

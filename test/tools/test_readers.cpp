@@ -1,7 +1,4 @@
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <Eigen/LU>
 #include <chrono>
@@ -11,7 +8,6 @@
 #include <functional>
 #include <random>
 #include <sstream>
-#include <thread>
 #include <vector>
 
 #include "dataset.h"
@@ -261,14 +257,9 @@ TEST(NpyWriter, KilledAtAnyMomentLeavesTheOldFileWhole) {
   std::mt19937 rng(9);
   std::uniform_real_distribution<double> delay(0.0, 2.0 * write_ms);
   for (int trial = 0; trial < 8; ++trial) {
-    const pid_t pid = ::fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
+    ASSERT_TRUE(killedAfter(delay(rng), [&] {
       for (;;) writeNpy(path, new_values.data(), rows, cols);
-    }
-    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay(rng)));
-    ::kill(pid, SIGKILL);
-    ASSERT_EQ(::waitpid(pid, nullptr, 0), pid);
+    }));
     const std::vector<float> read = readFloatMatrix(path, rows, cols);  // throws when torn
     ASSERT_EQ(read.size(), rows * cols) << "trial " << trial;
     EXPECT_TRUE(read == old_values || read == new_values) << "trial " << trial << ": mixed file";
