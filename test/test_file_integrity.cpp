@@ -305,6 +305,46 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   refused(toFormat1(edited), "evidence, format 1");
 }
 
+// A mutated file whose CRC was resealed loaded with clamps 0.5 + 1e-43 .. 0.5 + 2e-38 (log-odds
+// 1.6e-43 .. 2.4e-38): ordered and inside [0.001, 0.999], but every observed voxel clamped to
+// "occupied", free space gone. Clamping must never turn free into occupied: refused on reading.
+TEST(Integrity, ClampsAboveOrBelowOneHalfAreRefused) {
+  Scratch scratch;
+  const auto tree = smallMap();
+  std::ostringstream out;
+  out << std::setprecision(17);
+  tree->write(out);
+  const std::string original = out.str();
+  auto offsetOf = [&](float value) {  // the clamp's float in the section, once
+    std::string pattern(4, '\0');
+    std::memcpy(&pattern[0], &value, 4);
+    const size_t at = original.find(pattern, sectionStart(original));
+    EXPECT_EQ(original.find(pattern, at + 1), std::string::npos) << value << " twice";
+    return at;
+  };
+  const size_t lo = offsetOf(tree->getClampingThresMinLog());
+  const size_t hi = offsetOf(tree->getClampingThresMaxLog());
+  ASSERT_NE(lo, std::string::npos);
+  ASSERT_NE(hi, std::string::npos);
+  const std::pair<float, float> clamps[] = {{1.6e-43f, 2.35e-38f}, {0.4f, 3.0f}, {-2.0f, -0.1f}};
+  for (const auto& [min_log, max_log] : clamps) {
+    std::string edited = original;
+    std::memcpy(&edited[lo], &min_log, 4);
+    std::memcpy(&edited[hi], &max_log, 4);
+    reseal(&edited);
+    const std::string path = scratch.file("clamps.ot");
+    writeBytes(path, edited);
+    EXPECT_THROW(loadMap(path), std::runtime_error) << min_log << " .. " << max_log;
+  }
+  // The same models are refused where they are set.
+  EXPECT_NE(SensorModel({0.7, 0.4, 0.6, 0.97, 0.5}).problem(), "");
+  EXPECT_NE(SensorModel({0.7, 0.4, 0.12, 0.45, 0.5}).problem(), "");
+  EXPECT_EQ(SensorModel({0.7, 0.4, 0.5, 0.5001, 0.5}).problem(), "");
+  EvidentialOcTree above(0.2, 2);
+  above.setClampingThresMin(0.6);
+  EXPECT_THROW(saveMap(above, scratch.file("above.ot")), std::runtime_error);
+}
+
 // OctoMap's header `res` and the section's exact resolution: rounding (6 digits, what a plain
 // tree.write(path) prints) is restored exactly; anything else is corruption.
 TEST(Integrity, HeaderResolutionIsCheckedAgainstTheSection) {

@@ -71,7 +71,7 @@ TEST(ParameterSpace, EverySensorModelTheTreeAcceptsIsSavedAndLoaded) {
   const std::string path = tempPath("sensor.ot");
   const std::vector<double> hits{0.3, 0.5, 0.5001, 0.7, 0.999, 0.9995, 1.0, kNaN};
   const std::vector<double> misses{0.0, 0.0005, 0.001, 0.4, 0.5, 0.6, kNaN};
-  const std::vector<double> clamps{0.0, 0.001, 0.12, 0.5, 0.97, 0.999, 1.0};
+  const std::vector<double> clamps{0.0, 0.001, 0.12, 0.3, 0.5, 0.7, 0.97, 0.999, 1.0};
   const std::vector<double> thresholds{0.0, 0.5, 1.0};
   size_t accepted = 0, refused = 0;
   EvidentialOcTree tree(0.2, 2);  // one tree: constructing 8000 costs more than the checks

@@ -16,11 +16,16 @@ struct SensorModel {
   double occupancy_threshold = 0.0;  // P above which a voxel counts as occupied
 
   // Closed ranges (dynamic_reconfigure uses them as its slider bounds). Probabilities stay in
-  // [0.001, 0.999] (|log-odds| <= 6.9); a hit never lowers occupancy, a miss never raises it.
+  // [0.001, 0.999] (|log-odds| <= 6.9); a hit never lowers occupancy, a miss never raises it,
+  // and clamping never turns a voxel free by rays into an occupied one or the reverse
+  // (clamp_min <= 0.5 <= clamp_max; a mutated file with clamps 0.5 + 1e-43 .. 0.5 + 2e-38
+  // loaded with every observed voxel occupied).
   static constexpr double kMinProbability = 0.001;
   static constexpr double kMaxProbability = 0.999;
   static constexpr double kMinHit = 0.5, kMaxHit = kMaxProbability;
   static constexpr double kMinMiss = kMinProbability, kMaxMiss = 0.5;
+  static constexpr double kMinClampMin = kMinProbability, kMaxClampMin = 0.5;
+  static constexpr double kMinClampMax = 0.5, kMaxClampMax = kMaxProbability;
 
   // "" when the model is usable, else the first value out of range (and clamp_min < clamp_max).
   std::string problem() const;

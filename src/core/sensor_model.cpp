@@ -28,8 +28,8 @@ std::string SensorModel::problemOfLogOdds(float hit_log, float miss_log, float c
   };
   const Check checks[] = {{"hit", hit_log, kMinHit, kMaxHit},
                           {"miss", miss_log, kMinMiss, kMaxMiss},
-                          {"clamp_min", clamp_min_log, kMinProbability, kMaxProbability},
-                          {"clamp_max", clamp_max_log, kMinProbability, kMaxProbability},
+                          {"clamp_min", clamp_min_log, kMinClampMin, kMaxClampMin},
+                          {"clamp_max", clamp_max_log, kMinClampMax, kMaxClampMax},
                           {"occupancy_threshold", threshold_log, kMinProbability, kMaxProbability}};
   for (const Check& c : checks) {
     if (!(c.value >= logOdds(c.lo) && c.value <= logOdds(c.hi))) {  // NaN fails too

@@ -1,8 +1,8 @@
 #include "ros_params.h"
 
-#include <stdexcept>
-
 #include <ros/package.h>
+
+#include <stdexcept>
 
 namespace evidential_octomap {
 
@@ -42,7 +42,8 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("label_is_raw", c.label_is_raw, c.label_is_raw);
   nh.param("publish_rate", c.publish_rate, c.publish_rate);
   nh.param("publish_radius", c.publish_radius, c.publish_radius);
-  nh.param("uncertainty_range/automatic", c.uncertainty_range.automatic, c.uncertainty_range.automatic);
+  nh.param("uncertainty_range/automatic", c.uncertainty_range.automatic,
+           c.uncertainty_range.automatic);
   nh.param("uncertainty_range/min", c.uncertainty_range.min, c.uncertainty_range.min);
   nh.param("uncertainty_range/max", c.uncertainty_range.max, c.uncertainty_range.max);
   nh.param("queue_size", c.queue_size, c.queue_size);
@@ -174,8 +175,10 @@ void reconfigureLimits(MappingConfig* min, MappingConfig* max) {
   max->sensor_model_hit = SensorModel::kMaxHit;
   min->sensor_model_miss = SensorModel::kMinMiss;
   max->sensor_model_miss = SensorModel::kMaxMiss;
-  min->sensor_model_min = min->sensor_model_max = SensorModel::kMinProbability;
-  max->sensor_model_min = max->sensor_model_max = SensorModel::kMaxProbability;
+  min->sensor_model_min = SensorModel::kMinClampMin;
+  max->sensor_model_min = SensorModel::kMaxClampMin;
+  min->sensor_model_max = SensorModel::kMinClampMax;
+  max->sensor_model_max = SensorModel::kMaxClampMax;
 }
 
 }  // namespace evidential_octomap

@@ -42,7 +42,7 @@ std::string bytesOf(const EvidentialOcTree& tree) {
 TEST(QueryService, NonFinitePointsAreUnknown) {
   const EvidentialOcTree tree = wallMap();
   QueryMap::Request req;
-  req.points = {gp(3.05, 0.0, 0.05), gp(kNaN, 0, 0),     gp(0, kNaN, 0), gp(kInf, 0, 0),
+  req.points = {gp(3.05, 0.0, 0.05), gp(kNaN, 0, 0),    gp(0, kNaN, 0),   gp(kInf, 0, 0),
                 gp(-kInf, 0, 0),     gp(1e30, 1e30, 0), gp(3.05, 0, kNaN)};
   QueryMap::Response res;
   answerQuery(tree, req, &res);
@@ -91,11 +91,11 @@ TEST(ReconfigureLimits, SensorModelSlidersStayInsideTheCoreRanges) {
   // between sliders, checked when a value is set).
   for (double hit : {lo.sensor_model_hit, hi.sensor_model_hit})
     for (double miss : {lo.sensor_model_miss, hi.sensor_model_miss})
-      for (double clamp_min : {lo.sensor_model_min, 0.5})
-        for (double clamp_max : {0.6, hi.sensor_model_max}) {
+      for (double clamp_min : {lo.sensor_model_min, hi.sensor_model_min})
+        for (double clamp_max : {lo.sensor_model_max + 0.1, hi.sensor_model_max}) {
           const SensorModel model{hit, miss, clamp_min, clamp_max, 0.5};
-          EXPECT_EQ(model.problem(), "") << hit << " " << miss << " " << clamp_min << " "
-                                         << clamp_max;
+          EXPECT_EQ(model.problem(), "")
+              << hit << " " << miss << " " << clamp_min << " " << clamp_max;
         }
   // The generated defaults (Mapping.cfg) agree with the core too.
   const MappingConfig cfg_lo = MappingConfig::__getMin__(), cfg_hi = MappingConfig::__getMax__();
@@ -103,10 +103,10 @@ TEST(ReconfigureLimits, SensorModelSlidersStayInsideTheCoreRanges) {
   EXPECT_LE(cfg_hi.sensor_model_hit, SensorModel::kMaxHit);
   EXPECT_GE(cfg_lo.sensor_model_miss, SensorModel::kMinMiss);
   EXPECT_LE(cfg_hi.sensor_model_miss, SensorModel::kMaxMiss);
-  for (double v : {cfg_lo.sensor_model_min, cfg_lo.sensor_model_max})
-    EXPECT_GE(v, SensorModel::kMinProbability);
-  for (double v : {cfg_hi.sensor_model_min, cfg_hi.sensor_model_max})
-    EXPECT_LE(v, SensorModel::kMaxProbability);
+  EXPECT_GE(cfg_lo.sensor_model_min, SensorModel::kMinClampMin);
+  EXPECT_LE(cfg_hi.sensor_model_min, SensorModel::kMaxClampMin);
+  EXPECT_GE(cfg_lo.sensor_model_max, SensorModel::kMinClampMax);
+  EXPECT_LE(cfg_hi.sensor_model_max, SensorModel::kMaxClampMax);
 }
 
 TEST(ReconfigureLimits, UnaffordableKernelAndBadSensorModelsAreRefused) {
