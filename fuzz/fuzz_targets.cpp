@@ -1,6 +1,8 @@
 #include "fuzz_targets.h"
 
 #include <fcntl.h>
+#include <octomap/AbstractOcTree.h>
+#include <octomap/OcTree.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -9,23 +11,20 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
-#include <exception>
 #include <stdexcept>
 #include <typeinfo>
 #include <vector>
 
-#include <octomap/AbstractOcTree.h>
-#include <octomap/OcTree.h>
-
+#include "../src/core/crc32.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
 #include "evidential_octomap/map_editing.h"
-#include "../src/core/crc32.h"
 
 // Where sanitizers write their reports (weak: absent in builds without sanitizers).
 extern "C" void __sanitizer_set_report_fd(void* fd) __attribute__((weak));
@@ -123,8 +122,8 @@ std::unique_ptr<EvidentialOcTree> readOwnOutput(const std::string& bytes, const 
   std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(in));
   auto* tree = dynamic_cast<EvidentialOcTree*>(any.get());
   require(tree != nullptr, std::string(what) + ": our own output is not read back as our tree");
-  require(tree->readError().empty(), std::string(what) + ": our own output is rejected: " +
-                                         tree->readError());
+  require(tree->readError().empty(),
+          std::string(what) + ": our own output is rejected: " + tree->readError());
   require(!in.fail(), std::string(what) + ": our own output leaves the stream failed");
   any.release();
   return std::unique_ptr<EvidentialOcTree>(tree);
@@ -135,6 +134,8 @@ void exercise(EvidentialOcTree& tree, bool heavy) {
   require(num_classes >= 1 && num_classes <= EvidentialOcTree::kMaxClasses, "class count");
   require(static_cast<int>(tree.classNames().size()) == num_classes, "class name count");
   require(tree.calcNumNodes() == tree.size(), "size() disagrees with the node count");
+  // A read map has parameters the library accepts (a resealed file once loaded clamps 0.5+).
+  require(tree.parameterProblem().empty(), "read with bad parameters: " + tree.parameterProblem());
   (void)tree.memoryUsage();
 
   // Every node (inner ones too), every leaf, queries by key and by coordinate.
@@ -271,7 +272,8 @@ void silenceStderr() {
   ::dup2(devnull, 2);
   ::close(devnull);
   g_report_fd = saved;
-  if (__sanitizer_set_report_fd) __sanitizer_set_report_fd(reinterpret_cast<void*>(intptr_t(saved)));
+  if (__sanitizer_set_report_fd)
+    __sanitizer_set_report_fd(reinterpret_cast<void*>(intptr_t(saved)));
   // An exception escaping a target: say which, on the stderr that is still open.
   std::set_terminate([] {
     std::string what = "unknown exception";
@@ -334,8 +336,9 @@ int fuzzOtReader(const uint8_t* data, size_t size) {
   // With "size 0" AbstractOcTree::read reads no data at all, so only files that announce nodes
   // are comparable.
   if (header.size > 0) {
-    require(generic_ok == load_ok, generic_ok ? "loadMap rejects what AbstractOcTree::read accepts"
-                                              : "loadMap accepts what AbstractOcTree::read rejects");
+    require(generic_ok == load_ok, generic_ok
+                                       ? "loadMap rejects what AbstractOcTree::read accepts"
+                                       : "loadMap accepts what AbstractOcTree::read rejects");
   }
   return 0;
 }
@@ -349,8 +352,9 @@ struct ByteReader {
   bool done() const { return at >= size; }
   uint8_t byte() { return at < size ? data[at++] : 0; }
   double number() {
-    static const double kSpecial[] = {std::nan(""), INFINITY, -INFINITY, 1e30, -1e30, 3.4e38,
-                                      0.0, -0.0, 1e-300, 1.0, 0.5, 0.999, 0.001, 1e300};
+    static const double kSpecial[] = {std::nan(""), INFINITY, -INFINITY, 1e30,   -1e30,
+                                      3.4e38,       0.0,      -0.0,      1e-300, 1.0,
+                                      0.5,          0.999,    0.001,     1e300};
     const uint8_t kind = byte();
     if (kind < 48) return kSpecial[kind % (sizeof(kSpecial) / sizeof(kSpecial[0]))];
     float value = 0.f;  // four raw bytes as a float
