@@ -5,6 +5,14 @@
 
 namespace evidential_octomap::tools {
 
+void addDataOptions(CLI::App* cmd, std::string* data, const std::string& data_help,
+                    std::string* classes) {
+  cmd->add_option("--data", *data, data_help)->required()->check(CLI::ExistingPath);
+  cmd->add_option("--classes", *classes, "Class table YAML (config/classes_*.yaml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+}
+
 void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
   cmd->add_option("--resolution", *resolution, "Voxel size [m]")->capture_default_str();
   cmd->add_option("--rule", c->rule, "Fusion rule: dempster, sbki or ebs")
@@ -115,8 +123,10 @@ std::string variantName(const SemanticConfig& c) {
     if (c.adaptive_length && !c.reference_compat) v += " + adaptive length";
     if (c.uncertainty_threshold && !c.reference_compat) v += " + threshold";
     if (!(c.evidence_cap > 0.0)) v += " w/o evidence cap";
-    if (c.kernel_distance != SemanticConfig().kernel_distance) v += " kernel distance " + c.kernel_distance;
-    if (c.downsampling != SemanticConfig().downsampling && !c.reference_compat) v += " " + c.downsampling;
+    if (c.kernel_distance != SemanticConfig().kernel_distance)
+      v += " kernel distance " + c.kernel_distance;
+    if (c.downsampling != SemanticConfig().downsampling && !c.reference_compat)
+      v += " " + c.downsampling;
   }
   return v;
 }

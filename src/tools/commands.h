@@ -1,25 +1,28 @@
 // Subcommands of the `evidential_octomap` CLI; each lives in its own file with its own --help.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <string>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "evidence_sources.h"
 #include "evidential_octomap/semantic_config.h"
 
 namespace evidential_octomap::tools {
 
-void addMapCommand(CLI::App& app);      // map_sequence.cpp
-void addEvalCommand(CLI::App& app);     // evaluate.cpp
-void addCompareCommand(CLI::App& app);  // compare.cpp
-void addExportCommand(CLI::App& app);   // export_color.cpp
-void addMergeCommand(CLI::App& app);    // merge.cpp
-void addInfoCommand(CLI::App& app);     // info.cpp
-void addFeaturesCommand(CLI::App& app); // features.cpp
+void addMapCommand(CLI::App& app);       // map_sequence.cpp
+void addEvalCommand(CLI::App& app);      // evaluate.cpp
+void addCompareCommand(CLI::App& app);   // compare.cpp
+void addExportCommand(CLI::App& app);    // export_color.cpp
+void addMergeCommand(CLI::App& app);     // merge.cpp
+void addInfoCommand(CLI::App& app);      // info.cpp
+void addFeaturesCommand(CLI::App& app);  // features.cpp
 
 // --- shared option groups (defaults come from the structs, never restated) -----------------
+// --data (an existing path, described by data_help) and --classes (an existing class table YAML),
+// both required.
+void addDataOptions(CLI::App* cmd, std::string* data, const std::string& data_help,
+                    std::string* classes);
 // Mapping parameters of SemanticConfig plus the tree resolution.
 void addConfigOptions(CLI::App* cmd, SemanticConfig* config, double* resolution);
 // --evidence, -E, --knn-k, --knn-radius, --learned-model; the source name is parsed into

@@ -388,12 +388,7 @@ void addCompareCommand(CLI::App& app) {
       "reference_compat, sbki and ebs on the same data, evidence and queries; print one "
       "markdown table per dataset/protocol and write compare.md + compare.json. Also runs the "
       "RELLIS-3D scan with synthetic noisy predictions");
-  cmd->add_option("--data", o->data, "SemanticKITTI-layout directory")
-      ->required()
-      ->check(CLI::ExistingPath);
-  cmd->add_option("--classes", o->classes, "Class table YAML of --data")
-      ->required()
-      ->check(CLI::ExistingFile);
+  addDataOptions(cmd, &o->data, "SemanticKITTI-layout directory", &o->classes);
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
       ->capture_default_str();

@@ -94,12 +94,7 @@ void addEvalCommand(CLI::App& app) {
       "Metrics of a saved map on a dataset's GT-labelled points: O.Acc, per-class IoU, "
       "mIoU, Acc, Brier score, and the input predictions' per-point metrics");
   cmd->add_option("--map", o->map, "Map (.ot)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("--data", o->data, "Dataset directory (or a single .bin scan)")
-      ->required()
-      ->check(CLI::ExistingPath);
-  cmd->add_option("--classes", o->classes, "Class table YAML")
-      ->required()
-      ->check(CLI::ExistingFile);
+  addDataOptions(cmd, &o->data, "Dataset directory (or a single .bin scan)", &o->classes);
   cmd->add_option("--protocol", o->protocol,
                   "Which scans are queried: reconstruction (all) or held-out (second half)")
       ->check(CLI::IsMember({"reconstruction", "held-out"}))

@@ -66,12 +66,8 @@ void addFeaturesCommand(CLI::App& app) {
       "Write the learned evidence head's per-point features of each scan (<stem>.features.npy, "
       "float32 N x F), its GT and predictions (<stem>.gt.npy, <stem>.pred.npy, int32 class ids) "
       "and index.json (feature names, scan fingerprints) for the training script");
-  cmd->add_option("--data", o->data, "SemanticKITTI-layout directory with labels/ and predictions/")
-      ->required()
-      ->check(CLI::ExistingPath);
-  cmd->add_option("--classes", o->classes, "Class table YAML (config/classes_*.yaml)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  addDataOptions(cmd, &o->data, "SemanticKITTI-layout directory with labels/ and predictions/",
+                 &o->classes);
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
       ->capture_default_str();

@@ -112,12 +112,7 @@ void addMapCommand(CLI::App& app) {
       "poses.txt, calib.txt) or one pose-less scan; write map.ot, metrics.json, metrics.md, "
       "semantic.png, uncertainty.png, error.png, quality.png (error-vs-uncertainty curves and "
       "reliability diagram)");
-  cmd->add_option("--data", o->data, "Dataset directory (or a single .bin scan)")
-      ->required()
-      ->check(CLI::ExistingPath);
-  cmd->add_option("--classes", o->classes, "Class table YAML (config/classes_*.yaml)")
-      ->required()
-      ->check(CLI::ExistingFile);
+  addDataOptions(cmd, &o->data, "Dataset directory (or a single .bin scan)", &o->classes);
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--protocol", o->protocol,
                   "reconstruction (query the mapped scans) or held-out (map the first half, "
