@@ -409,6 +409,35 @@ TEST(ScanIntegration, OneAndTwoThreadsGiveTheSameLabels) {
   }
 }
 
+// The kernel computes rows only for voxels the map keeps (existing leaves, pruned blocks whole,
+// and this scan's ray voxels). With an `unobserved` map every row is computed and the map's
+// share of them must be the same, bit for bit; the unobserved map shows rows were skipped.
+TEST(ScanIntegration, RowsOnlyForKeptVoxelsGiveTheSameMapBitForBit) {
+  SyntheticScene scene;
+  SemanticConfig config;
+  config.threads = 2;
+  EvidentialOcTree masked(0.2, scene.num_classes, config),
+      everywhere(0.2, scene.num_classes, config), unobserved(0.2, scene.num_classes, config);
+  const octomap::point3d origins[] = {{0.05f, 0.1f, 1.7f},
+                                      {0.05f, 0.1f, 1.7f},
+                                      {0.05f, 0.1f, 1.7f},
+                                      {1.05f, 0.9f, 1.7f},
+                                      {-2.95f, -0.7f, 1.3f}};
+  bool saw_pruned_block = false;
+  for (unsigned i = 0; i < 5; ++i) {
+    const SyntheticScan s = scene.scan(origins[i], i + 1);
+    for (auto it = masked.begin_leafs(); it != masked.end_leafs(); ++it) {
+      saw_pruned_block |= it.getDepth() < masked.getTreeDepth();
+    }
+    masked.insertSemanticScan(s.points_W, s.evidence, s.origin_W);
+    everywhere.insertSemanticScan(s.points_W, s.evidence, s.origin_W, &unobserved);
+  }
+  EXPECT_TRUE(saw_pruned_block) << "the scene should exercise rows inside pruned blocks";
+  EXPECT_GT(unobserved.numSemanticNodes(), 0u);
+  EXPECT_GT(masked.numSemanticNodes(), 0u);
+  EXPECT_TRUE(compareTrees(masked, everywhere));
+}
+
 // --- leaf creation by the kernel --------------------------------------------------------------
 
 std::set<KeyTuple> fullDepthLeafKeys(octomap::OcTree& tree) {

@@ -93,10 +93,11 @@ void KernelPass::scatter(const KernelPoint& point, const octomap::point3d& posit
       const double sxy = sx + axis[1][oy];
       if (sxy >= 1.0) continue;
       for (int oz = lo[2]; oz <= hi[2]; ++oz) {
-        const double k = table_(sxy + axis[2][oz]);
-        if (k <= 0.0) continue;
         const uint32_t local =
             uint32_t((z0 + oz) << (2 * kSubtreeLevels) | (y0 + oy) << kSubtreeLevels | (x0 + ox));
+        if (out->masked && !(out->mask[local >> kSubtreeLevels] >> (x0 + ox) & 1u)) continue;
+        const double k = table_(sxy + axis[2][oz]);
+        if (k <= 0.0) continue;
         uint32_t& row = out->index[local];
         if (row == KernelRows::kNone) {
           row = static_cast<uint32_t>(out->touched.size());

@@ -52,6 +52,11 @@ struct KernelPoint {
 // Kernel rows of one subtree: a dense index over its 64^3 voxels (reset after use) and C
 // doubles per row. One per thread.
 struct KernelRows {
+  // Which local voxels may get a row, one bit each (word z * 64 + y, bit x); every voxel when
+  // `masked` is false. The map keeps rows only for voxels it has a leaf for, so the rows of the
+  // others (behind surfaces, under the ground: about half the support) are not computed.
+  std::vector<uint64_t> mask;
+  bool masked = false;
   std::vector<uint32_t> index;    // local voxel -> row, kNone when untouched
   std::vector<uint32_t> touched;  // local voxels with a row, in row order
   std::vector<double> rows;

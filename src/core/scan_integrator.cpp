@@ -148,14 +148,15 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   stats.semantic_points = scratch.points.positions.size();
   const KernelPass kernel(config_, *tree);
   kernel.preparePoints(scratch.points, threads, &scratch.kernel_points);
-  scratch.subtrees.build(scratch.bricks[0], scratch.points, scratch.kernel_points, kernel, threads);
+  const bool keep = unobserved && !config_.kernel_creates_leaves;
+  scratch.subtrees.build(*tree, scratch.bricks[0], scratch.points, scratch.kernel_points, kernel,
+                         threads, config_.kernel_creates_leaves || keep);
   timer.stop(&stats.ms_kernel, &stats.cpu_ms_kernel);
 
   // 3. One pass over the tree, subtree by subtree in parallel: each subtree's kernel rows (the
   //    one kernel loop), merged with its ray voxels, then its leaves and inner nodes.
   timer = PhaseTimer();
   std::vector<DroppedRows> dropped;
-  const bool keep = unobserved && !config_.kernel_creates_leaves;
   stats.voxels_updated = tree->applySubtrees(scratch.subtrees, config_.kernel_creates_leaves,
                                              threads, keep ? &dropped : nullptr);
   if (keep) keepUnobserved(dropped, num_classes, unobserved);

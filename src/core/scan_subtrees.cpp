@@ -35,9 +35,12 @@ double threadCpuMs() {
 
 }  // namespace
 
-void ScanSubtrees::build(const VoxelBricks& rays, const SemanticPoints& points,
+void ScanSubtrees::build(const EvidentialOcTree& tree, const VoxelBricks& rays,
+                         const SemanticPoints& points,
                          const std::vector<KernelPoint>& kernel_points, const KernelPass& kernel,
-                         int threads) {
+                         int threads, bool rows_everywhere) {
+  tree_ = &tree;
+  rows_everywhere_ = rows_everywhere;
   rays_ = &rays;
   points_ = &points;
   kernel_points_ = &kernel_points;
@@ -45,6 +48,7 @@ void ScanSubtrees::build(const VoxelBricks& rays, const SemanticPoints& points,
   threads_.resize(threads);
   for (PerThread& t : threads_) {
     t.kernel.index.resize(size_t(1) << (3 * kSubtreeLevels), KernelRows::kNone);
+    t.kernel.mask.resize(size_t(1) << (2 * kSubtreeLevels));
     t.kernel_cpu_ms = 0.0;
   }
   collectPointSubtrees();
@@ -104,13 +108,49 @@ void ScanSubtrees::mergeSeeds() {
   }
 }
 
-SubtreeView ScanSubtrees::updates(size_t i, int thread) {
+// A leaf of the map covers a cube of voxels: one x-row of the subtree is one mask word.
+void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, int z, int size,
+                              KernelRows* rows) const {
+  if (tree_->nodeHasChildren(node)) {
+    const int half = size / 2;
+    for (unsigned c = 0; c < 8; ++c) {
+      if (tree_->nodeChildExists(node, c)) {
+        markLeaves(tree_->getNodeChild(node, c), x + (c & 1 ? half : 0), y + (c & 2 ? half : 0),
+                   z + (c & 4 ? half : 0), half, rows);
+      }
+    }
+    return;
+  }
+  const uint64_t bits = size >= 64 ? ~uint64_t(0) : ((uint64_t(1) << size) - 1) << x;
+  for (int zz = z; zz < z + size; ++zz)
+    for (int yy = y; yy < y + size; ++yy) rows->mask[size_t(zz) << kSubtreeLevels | yy] |= bits;
+}
+
+void ScanSubtrees::buildMask(size_t i, const EvidentialOcTreeNode* existing,
+                             KernelRows* rows) const {
+  rows->masked = !rows_everywhere_ && !(existing && !tree_->nodeHasChildren(existing));
+  if (!rows->masked) return;  // every voxel may get a row (or the subtree is one pruned leaf)
+  std::fill(rows->mask.begin(), rows->mask.end(), 0);
+  if (existing) markLeaves(existing, 0, 0, 0, kSubtreeSize, rows);
+  const octomap::OcTreeKey& base = seeds_[i].key;
+  constexpr unsigned kUpdated = 1u << kRayFree | 1u << kRayOccupied;
+  rays_->forEachSorted(ranges_[i].first_brick, ranges_[i].last_brick,
+                       [&](const octomap::OcTreeKey& voxel, uint64_t, unsigned flags) {
+                         if (!(flags & kUpdated)) return;
+                         const int x = voxel[0] - base[0], y = voxel[1] - base[1],
+                                   z = voxel[2] - base[2];
+                         rows->mask[size_t(z) << kSubtreeLevels | y] |= uint64_t(1) << x;
+                       });
+}
+
+SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNode* existing) {
   PerThread& t = threads_[thread];
   const Range& range = ranges_[i];
   const octomap::OcTreeKey& base = seeds_[i].key;
   // 1. The kernel rows of the subtree, in Morton order.
   const double start = threadCpuMs();
   KernelRows& kernel = t.kernel;
+  if (range.first_point < range.last_point) buildMask(i, existing, &kernel);
   kernel.touched.clear();
   kernel.rows.clear();
   for (size_t p = range.first_point; p < range.last_point; ++p) {

@@ -15,11 +15,14 @@ namespace evidential_octomap {
 class ScanSubtrees : public SubtreeSource {
  public:
   // rays: sorted, with the flags of ray_casting.h. points / kernel_points: the semantic points.
-  // All must outlive the source.
-  void build(const VoxelBricks& rays, const SemanticPoints& points,
-             const std::vector<KernelPoint>& kernel_points, const KernelPass& kernel, int threads);
+  // All must outlive the source. rows_everywhere: rows for every voxel of the supports (the
+  // map creates leaves for them, or keeps the rows it drops); else only for voxels the map has
+  // a leaf for or that a ray of this scan updates.
+  void build(const EvidentialOcTree& tree, const VoxelBricks& rays, const SemanticPoints& points,
+             const std::vector<KernelPoint>& kernel_points, const KernelPass& kernel, int threads,
+             bool rows_everywhere);
   const std::vector<SubtreeSeed>& seeds() const override { return seeds_; }
-  SubtreeView updates(size_t i, int thread) override;
+  SubtreeView updates(size_t i, int thread, const EvidentialOcTreeNode* existing) override;
   // CPU time the threads spent in the kernel loop since build() [ms].
   double kernelCpuMs() const;
 
@@ -36,7 +39,13 @@ class ScanSubtrees : public SubtreeSource {
   };
   void collectPointSubtrees();
   void mergeSeeds();
+  // KernelRows::mask of subtree i: the leaves of `existing` and the voxels rays update.
+  void buildMask(size_t i, const EvidentialOcTreeNode* existing, KernelRows* rows) const;
+  void markLeaves(const EvidentialOcTreeNode* node, int x, int y, int z, int size,
+                  KernelRows* rows) const;
 
+  const EvidentialOcTree* tree_ = nullptr;
+  bool rows_everywhere_ = true;
   const VoxelBricks* rays_ = nullptr;
   const SemanticPoints* points_ = nullptr;
   const std::vector<KernelPoint>* kernel_points_ = nullptr;

@@ -37,8 +37,11 @@ class SubtreeSource {
   // Sorted in Morton order, one per subtree.
   virtual const std::vector<SubtreeSeed>& seeds() const = 0;
   // The updates of seeds()[i]. Called concurrently with distinct `thread` indices (0 ..
-  // threads - 1); the view stays valid until that thread's next call.
-  virtual SubtreeView updates(size_t i, int thread) = 0;
+  // threads - 1); the view stays valid until that thread's next call. `existing` is the
+  // subtree's root node as it was before this update (nullptr when the subtree is new): a
+  // source may skip the rows of voxels that neither exist there nor get an occupancy update,
+  // since the map would drop them.
+  virtual SubtreeView updates(size_t i, int thread, const EvidentialOcTreeNode* existing) = 0;
 };
 
 // Evidence the map dropped (kernel rows for voxels it has no leaf for), per thread.

@@ -66,7 +66,9 @@ class ListSource : public SubtreeSource {
     runs_.push_back(updates + count);
   }
   const std::vector<SubtreeSeed>& seeds() const override { return seeds_; }
-  SubtreeView updates(size_t i, int) override { return {runs_[i], runs_[i + 1], rows_}; }
+  SubtreeView updates(size_t i, int, const EvidentialOcTreeNode*) override {
+    return {runs_[i], runs_[i + 1], rows_};
+  }
 
  private:
   const double* rows_;
@@ -161,7 +163,7 @@ size_t EvidentialOcTree::applySubtrees(SubtreeSource& source, bool create_semant
 #pragma omp for schedule(dynamic, 1)
     for (size_t i = 0; i < pass.tasks.size(); ++i) {
       const UpdateTask& task = pass.tasks[i];
-      const SubtreeView view = source.updates(task.seed, thread);
+      const SubtreeView view = source.updates(task.seed, thread, task.is_new ? nullptr : task.node);
       const UpdateBatch batch{view.rows, create_semantic_leaves, keep};
       if (task.node) {
         changed += applyUpdatesRecurs(task.node, tree_depth - kSubtreeLevels, task.is_new,
