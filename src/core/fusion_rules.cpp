@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "evidential_octomap/fusion_rule.h"
+#include "fusion_contributions.h"
 
 namespace evidential_octomap {
 namespace {
@@ -33,16 +34,7 @@ class DempsterRule : public FusionRule {
 
   void contribute(const PointOpinion& point, double k, int num_classes,
                   double* increments) const override {
-    if (k <= 0.0) return;
-    // The extended belief is an opinion only for k in [0, 1] (sigma0 > 1 can exceed 1).
-    k = std::min(k, 1.0);
-    // Extended belief b~ = k b, u~ = 1 - k (1 - u); e_hat / C = b~ / u~ = k e / (S (1 - k) + k C),
-    // written so that huge S (evidence near FLT_MAX) does not cancel to 0 at k = 1.
-    const double factor = k / (point.strength * (1.0 - k) + k * num_classes);
-    for (int c = 0; c < num_classes; ++c) {
-      const float e = point.evidence[c];
-      if (e > 0.0f) increments[c] += std::log1p(e * factor);
-    }
+    DempsterContribution(point, num_classes)(k, increments);
   }
 
   void add(float* payload, const double* increments, int num_classes) const override {
@@ -134,8 +126,9 @@ class SbkiRule : public DirichletRule {
   explicit SbkiRule(float prior) : DirichletRule(prior) {}
   FusionRuleType type() const override { return FusionRuleType::kSbki; }
   bool usesUncertaintyKernel() const override { return false; }
-  void contribute(const PointOpinion& point, double k, int, double* increments) const override {
-    if (point.argmax >= 0) increments[point.argmax] += k;
+  void contribute(const PointOpinion& point, double k, int num_classes,
+                  double* increments) const override {
+    SbkiContribution(point, num_classes)(k, increments);
   }
 };
 
@@ -146,8 +139,7 @@ class EbsRule : public DirichletRule {
   bool usesUncertaintyKernel() const override { return true; }
   void contribute(const PointOpinion& point, double k, int num_classes,
                   double* increments) const override {
-    const double scale = k / point.strength;  // p = alpha / S
-    for (int c = 0; c < num_classes; ++c) increments[c] += scale * (point.evidence[c] + 1.0);
+    EbsContribution(point, num_classes)(k, increments);
   }
 };
 

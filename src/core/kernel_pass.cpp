@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "evidential_octomap/kernel.h"
+#include "fusion_contributions.h"
 #include "subtree_updates.h"
 
 namespace evidential_octomap {
@@ -60,6 +61,21 @@ void KernelPass::preparePoints(const SemanticPoints& points, int threads,
 
 void KernelPass::scatter(const KernelPoint& point, const octomap::point3d& position,
                          const octomap::OcTreeKey& base, KernelRows* out) const {
+  switch (rule_.type()) {
+    case FusionRuleType::kDempster:
+      return scatterWith(DempsterContribution(point.opinion, num_classes_), point, position, base,
+                         out);
+    case FusionRuleType::kSbki:
+      return scatterWith(SbkiContribution(point.opinion, num_classes_), point, position, base, out);
+    case FusionRuleType::kEbs:
+      return scatterWith(EbsContribution(point.opinion, num_classes_), point, position, base, out);
+  }
+}
+
+template <class Contribution>
+void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& point,
+                             const octomap::point3d& position, const octomap::OcTreeKey& base,
+                             KernelRows* out) const {
   constexpr int kSize = 1 << kSubtreeLevels;
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
@@ -104,7 +120,7 @@ void KernelPass::scatter(const KernelPoint& point, const octomap::point3d& posit
           out->touched.push_back(local);
           out->rows.resize(out->rows.size() + num_classes_, 0.0);
         }
-        rule_.contribute(point.opinion, k, num_classes_, &out->rows[size_t(row) * num_classes_]);
+        contribute(k, &out->rows[size_t(row) * num_classes_]);
       }
     }
   }
