@@ -4,6 +4,7 @@
 
 #include <geometry_msgs/Point.h>
 #include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <sensor_msgs/PointCloud2.h>
 #include <tf2_ros/static_transform_broadcaster.h>
@@ -12,6 +13,8 @@
 #include <functional>
 #include <string>
 #include <vector>
+
+#include "evidential_octomap/QueryMap.h"
 
 namespace node_test {
 
@@ -106,6 +109,32 @@ inline bool waitFor(const std::function<bool()>& done, double timeout_s = 60.0) 
     ros::WallDuration(0.02).sleep();
   }
   return false;
+}
+
+// Calls the ~query service of `server` (a failed call fails the test and answers nothing).
+inline evidential_octomap::QueryMap::Response queryNode(
+    const std::string& server, const std::vector<geometry_msgs::Point>& points) {
+  evidential_octomap::QueryMap srv;
+  srv.request.points = points;
+  EXPECT_TRUE(ros::service::call(server + "/query", srv));
+  return srv.response;
+}
+
+// Label, occupancy and uncertainty of every point of the grid x0:dx:x1 * y0:dy:y1 * z0:dz:z1,
+// flattened: what a test compares before and after an event that must not change the map.
+inline std::vector<float> snapshotGrid(const std::string& server, double x0, double x1, double dx,
+                                       double y0, double y1, double dy, double z0, double z1,
+                                       double dz) {
+  std::vector<geometry_msgs::Point> pts;
+  for (double x = x0; x <= x1; x += dx)
+    for (double y = y0; y <= y1; y += dy)
+      for (double z = z0; z <= z1; z += dz) pts.push_back(gp(x, y, z));
+  const auto r = queryNode(server, pts);
+  std::vector<float> s;
+  for (size_t i = 0; i < r.labels.size(); ++i) {
+    s.insert(s.end(), {float(r.labels[i]), r.occupancy[i], r.uncertainties[i]});
+  }
+  return s;
 }
 
 }  // namespace node_test

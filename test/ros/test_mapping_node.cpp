@@ -1,6 +1,17 @@
 // rostest: the real evidential_mapping_node on a real roscore. Publishes clouds with evidence and
 // a static TF, then checks the markers, the voxel cloud, every service, and that malformed
 // clouds or missing TF leave the node alive, the map unchanged and a clear log line.
+#include <dynamic_reconfigure/Reconfigure.h>
+#include <geometry_msgs/TransformStamped.h>
+#include <gtest/gtest.h>
+#include <octomap/AbstractOcTree.h>
+#include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
+#include <sensor_msgs/PointCloud2.h>
+#include <std_srvs/Empty.h>
+#include <tf2_ros/static_transform_broadcaster.h>
+#include <visualization_msgs/MarkerArray.h>
+
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -9,17 +20,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <geometry_msgs/TransformStamped.h>
-#include <gtest/gtest.h>
-#include <octomap/AbstractOcTree.h>
-#include <dynamic_reconfigure/Reconfigure.h>
-#include <ros/ros.h>
-#include <rosgraph_msgs/Log.h>
-#include <sensor_msgs/PointCloud2.h>
-#include <std_srvs/Empty.h>
-#include <tf2_ros/static_transform_broadcaster.h>
-#include <visualization_msgs/MarkerArray.h>
 
 #include "evidential_octomap/BoundingBoxQuery.h"
 #include "evidential_octomap/EvidentialMap.h"
@@ -34,7 +34,7 @@ namespace eo = evidential_octomap;
 
 namespace {
 
-constexpr int kC = 20;        // SemanticKITTI table
+constexpr int kC = 20;         // SemanticKITTI table
 constexpr int kBuilding = 13;  // colour (255, 200, 0)
 constexpr int kRoad = 9;
 // Where the server's services live and which node's /rosout lines are its log (a nodelet logs
@@ -45,8 +45,9 @@ std::string kLogNode = kNode;
 // The sensor sits at (1, 0, 0) in map; its clouds are in frame "lidar".
 // Scene (sensor frame): a wall of class `wall_class` at x = 4 (map x = 5), y in [-2, 2],
 // z in [0, 1.5]; a road patch at z = -1.6 in front of it.
-using node_test::Point;
 using node_test::gp;
+using node_test::Point;
+using node_test::snapshotGrid;
 
 std::vector<Point> scene(float wall_x = 4.05f, int wall_class = kBuilding) {
   std::vector<Point> pts = node_test::wall(wall_x, -2.f, 2.f, 0.f, 1.5f, 0.05f, wall_class);
@@ -68,7 +69,8 @@ class MappingNodeTest : public ::testing::Test {
  protected:
   void SetUp() override {
     cloud_pub_ = nh_.advertise<sensor_msgs::PointCloud2>("cloud_in", 5);
-    semantic_sub_ = nh_.subscribe("occupied_cells_vis_array", 1, &MappingNodeTest::onSemantic, this);
+    semantic_sub_ =
+        nh_.subscribe("occupied_cells_vis_array", 1, &MappingNodeTest::onSemantic, this);
     uncertainty_sub_ =
         nh_.subscribe("uncertainty_cells_vis_array", 1, &MappingNodeTest::onUncertainty, this);
     cloud_sub_ = nh_.subscribe("semantic_cloud", 1, &MappingNodeTest::onCloud, this);
@@ -128,26 +130,12 @@ class MappingNodeTest : public ::testing::Test {
   }
 
   eo::QueryMap::Response query(const std::vector<geometry_msgs::Point>& points) {
-    eo::QueryMap srv;
-    srv.request.points = points;
-    EXPECT_TRUE(ros::service::call(kNode + "/query", srv));
-    return srv.response;
+    return node_test::queryNode(kNode, points);
   }
 
   // Label, occupancy and uncertainty on a grid covering the scene and the bad clouds' region.
   std::vector<float> snapshot() {
-    std::vector<geometry_msgs::Point> pts;
-    for (double x = 0.0; x <= 10.0; x += 0.2)
-      for (double y = -2.5; y <= 2.5; y += 0.2)
-        for (double z = -1.8; z <= 1.6; z += 0.2) pts.push_back(gp(x, y, z));
-    const auto r = query(pts);
-    std::vector<float> s;
-    for (size_t i = 0; i < r.labels.size(); ++i) {
-      s.push_back(r.labels[i]);
-      s.push_back(r.occupancy[i]);
-      s.push_back(r.uncertainties[i]);
-    }
-    return s;
+    return snapshotGrid(kNode, 0.0, 10.0, 0.2, -2.5, 2.5, 0.2, -1.8, 1.6, 0.2);
   }
 
   ros::NodeHandle nh_;
@@ -292,7 +280,8 @@ TEST_F(MappingNodeTest, SaveMapWritesAnOtThatReadsBackAsEvidentialOcTree) {
 
 TEST_F(MappingNodeTest, LoadMapRestoresASavedMapAndRefusesBadFiles) {
   insert(lidarCloud(scene()));
-  const std::string path = "/tmp/evidential_octomap_rostest_load_" + std::to_string(getpid()) + ".ot";
+  const std::string path =
+      "/tmp/evidential_octomap_rostest_load_" + std::to_string(getpid()) + ".ot";
   eo::SaveMap save;
   save.request.path = path;
   ASSERT_TRUE(ros::service::call(kNode + "/save_map", save));
@@ -365,8 +354,8 @@ TEST_F(MappingNodeTest, ClearBbxClearsOnlyInside) {
     EXPECT_GE(r.occupancy[i], 0.f);
     EXPECT_LT(r.occupancy[i], 0.5f);
   }
-  EXPECT_EQ(r.labels[2], kBuilding);      // outside: kept
-  EXPECT_EQ(r.labels[3], kBuilding);      // just outside the box edge (y < 0.5)
+  EXPECT_EQ(r.labels[2], kBuilding);  // outside: kept
+  EXPECT_EQ(r.labels[3], kBuilding);  // just outside the box edge (y < 0.5)
   EXPECT_EQ(r.labels[4], kRoad);
 }
 

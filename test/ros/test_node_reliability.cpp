@@ -38,6 +38,7 @@
 
 namespace eo = evidential_octomap;
 using node_test::gp;
+using node_test::snapshotGrid;
 using node_test::waitFor;
 
 namespace {
@@ -107,12 +108,6 @@ class NodeReliabilityTest : public ::testing::Test {
     return false;
   }
 
-  eo::QueryMap::Response query(const std::vector<geometry_msgs::Point>& points) {
-    eo::QueryMap srv;
-    srv.request.points = points;
-    EXPECT_TRUE(ros::service::call(kNode + "/query", srv));
-    return srv.response;
-  }
   int wallLabel() { return query({gp(5.05, 0.0, 0.75)}).labels.at(0); }
 
   // Publishes the wall and waits until the node has mapped it.
@@ -123,18 +118,13 @@ class NodeReliabilityTest : public ::testing::Test {
     ASSERT_EQ(wallLabel(), kBuilding);
   }
 
+  eo::QueryMap::Response query(const std::vector<geometry_msgs::Point>& points) {
+    return node_test::queryNode(kNode, points);
+  }
+
   // Label, occupancy and uncertainty on a grid over the wall and the empty space behind it.
   std::vector<float> snapshot() {
-    std::vector<geometry_msgs::Point> pts;
-    for (double x = 3.0; x <= 9.0; x += 0.2)
-      for (double y = -2.5; y <= 2.5; y += 0.25)
-        for (double z = -0.2; z <= 1.6; z += 0.3) pts.push_back(gp(x, y, z));
-    const auto r = query(pts);
-    std::vector<float> s;
-    for (size_t i = 0; i < r.labels.size(); ++i) {
-      s.insert(s.end(), {float(r.labels[i]), r.occupancy[i], r.uncertainties[i]});
-    }
-    return s;
+    return snapshotGrid(kNode, 3.0, 9.0, 0.2, -2.5, 2.5, 0.25, -0.2, 1.6, 0.3);
   }
 
   // Calls a service from another thread: a call that never returns fails the test instead of

@@ -2,7 +2,6 @@
 """rostest of play_semantickitti.py: the cloud layout, the one-hot derived evidence against the
 bundled files, the map -> velodyne pose formula, and the latched evidence_source."""
 import os
-import threading
 import unittest
 
 import numpy as np
@@ -13,6 +12,7 @@ import yaml
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
 from tf2_msgs.msg import TFMessage
+from topic_store import TopicStore
 
 PKG = "evidential_octomap"
 
@@ -27,30 +27,18 @@ class PlayerTest(unittest.TestCase):
             table = yaml.safe_load(f)
         cls.num_classes = len(table["classes"])
         cls.learning_map = {int(k): int(v) for k, v in table["learning_map"].items()}
-        cls.lock = threading.Lock()
-        cls.clouds, cls.tfs, cls.source = [], [], []
-        rospy.Subscriber("/velodyne_points", PointCloud2, cls.keep(cls.clouds), queue_size=5)
-        rospy.Subscriber("/tf", TFMessage, cls.keep(cls.tfs), queue_size=20)
-        rospy.Subscriber("/play_semantickitti/evidence_source", String, cls.keep(cls.source))
+        cls.topics = TopicStore()
+        cls.topics.subscribe("/velodyne_points", PointCloud2)
+        cls.topics.subscribe("/tf", TFMessage, queue_size=20)
+        cls.topics.subscribe("/play_semantickitti/evidence_source", String)
 
-    @classmethod
-    def keep(cls, store):
-        def callback(msg):
-            with cls.lock:
-                store.append(msg)
-        return callback
-
-    def wait_for(self, store, n=1):
-        deadline = rospy.Time.now() + rospy.Duration(60)
-        while not rospy.is_shutdown() and rospy.Time.now() < deadline:
-            with self.lock:
-                if len(store) >= n:
-                    return list(store)
-            rospy.sleep(0.05)
-        self.fail("no message")
+    def wait_for(self, topic):
+        messages = self.topics.wait_for(topic)
+        self.assertIsNotNone(messages, "nothing on " + topic)
+        return messages
 
     def test_cloud_has_xyz_and_one_hot_derived_evidence_of_the_predictions(self):
-        cloud = self.wait_for(self.clouds)[0]
+        cloud = self.wait_for("/velodyne_points")[0]
         self.assertEqual(cloud.header.frame_id, "velodyne")
         fields = {f.name: f for f in cloud.fields}
         self.assertEqual(fields["evidence"].count, self.num_classes)
@@ -76,7 +64,7 @@ class PlayerTest(unittest.TestCase):
         np.testing.assert_array_equal(ev.max(axis=1), 20.0)               # magnitude 20
 
     def test_velodyne_pose_is_inv_tr_times_p_times_tr(self):
-        tfs = self.wait_for(self.tfs)
+        tfs = self.wait_for("/tf")
         t = tfs[0].transforms[0]
         self.assertEqual((t.header.frame_id, t.child_frame_id), ("map", "velodyne"))
         calib = dict(line.split(":", 1) for line in open(os.path.join(self.data, "calib.txt")) if ":" in line)
@@ -95,7 +83,7 @@ class PlayerTest(unittest.TestCase):
         self.assertAlmostEqual(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2, 1.0, places=6)
 
     def test_evidence_source_says_derived(self):
-        source = self.wait_for(self.source)[0].data
+        source = self.wait_for("/play_semantickitti/evidence_source")[0].data
         self.assertTrue(source.startswith("derived"), source)
         self.assertIn("magnitude 20", source)
 

@@ -4,7 +4,6 @@ the C++ learned head (cross-fitted fold B), so its argmax accuracy equals what t
 computed for that scan (test/fixtures/learned_evidence_points.txt), u varies from point to point,
 and ~evidence_source says "learned (cross-fitted)"."""
 import os
-import threading
 import unittest
 
 import numpy as np
@@ -14,6 +13,7 @@ import rostest
 import yaml
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import String
+from topic_store import TopicStore
 
 PKG = "evidential_octomap"
 
@@ -29,26 +29,14 @@ class PlayerLearnedTest(unittest.TestCase):
         cls.lut = np.zeros(1 << 16, np.int64)
         for raw, c in table["learning_map"].items():
             cls.lut[int(raw)] = int(c)
-        cls.lock = threading.Lock()
-        cls.clouds, cls.source = [], []
-        rospy.Subscriber("/velodyne_points", PointCloud2, cls.keep(cls.clouds), queue_size=2)
-        rospy.Subscriber("/play_semantickitti/evidence_source", String, cls.keep(cls.source))
+        cls.topics = TopicStore()
+        cls.topics.subscribe("/velodyne_points", PointCloud2, queue_size=2)
+        cls.topics.subscribe("/play_semantickitti/evidence_source", String)
 
-    @classmethod
-    def keep(cls, store):
-        def callback(msg):
-            with cls.lock:
-                store.append(msg)
-        return callback
-
-    def wait_for(self, store):
-        deadline = rospy.Time.now() + rospy.Duration(90)
-        while not rospy.is_shutdown() and rospy.Time.now() < deadline:
-            with self.lock:
-                if store:
-                    return store[0]
-            rospy.sleep(0.05)
-        self.fail("no message")
+    def first(self, topic):
+        messages = self.topics.wait_for(topic, timeout_s=90)
+        self.assertIsNotNone(messages, "nothing on " + topic)
+        return messages[0]
 
     def script_accuracy(self):
         path = os.path.join(self.root, "test", "fixtures", "learned_evidence_points.txt")
@@ -59,7 +47,7 @@ class PlayerLearnedTest(unittest.TestCase):
         self.fail("no accuracy of scan 000000 in " + path)
 
     def test_evidence_is_the_cross_fitted_learned_head(self):
-        cloud = self.wait_for(self.clouds)
+        cloud = self.first("/velodyne_points")
         fields = {f.name: f for f in cloud.fields}
         self.assertEqual(fields["evidence"].count, self.num_classes)
         dtype = np.dtype({"names": ["evidence"], "formats": [("<f4", (self.num_classes,))],
@@ -78,7 +66,7 @@ class PlayerLearnedTest(unittest.TestCase):
         self.assertGreater(u[keep].std(), 0.05)  # not a constant like derived one-hot evidence
 
     def test_evidence_source_says_learned_cross_fitted(self):
-        source = self.wait_for(self.source).data
+        source = self.first("/play_semantickitti/evidence_source").data
         self.assertTrue(source.startswith("learned (cross-fitted)"), source)
 
 
