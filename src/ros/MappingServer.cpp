@@ -127,10 +127,24 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
 }
 
 MappingServer::~MappingServer() {
+  // Every source of callbacks stops before the members it uses go away: a tf2 MessageFilter or
+  // Synchronizer outliving its subscriber, or a callback left queued for it, aborts the process
+  // (boost::lock_error on a destroyed mutex; ros/geometry2#379, ros/ros_comm#720), which for a
+  // nodelet takes the whole manager down.
   if (intake_spinner_) intake_spinner_->stop();
   if (files_spinner_) files_spinner_->stop();
+  cloud_sub_.unsubscribe();
+  image_sub_.unsubscribe();
+  info_sub_.unsubscribe();
+  intake_queue_.disable();
+  intake_queue_.clear();
+  publish_timer_.stop();
+  status_timer_.stop();
+  reconfigure_server_.reset();
   clouds_->close();
   if (insertion_thread_.joinable()) insertion_thread_.join();
+  image_sync_.reset();
+  tf_filter_.reset();
 }
 
 void MappingServer::subscribeInputs() {

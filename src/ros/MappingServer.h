@@ -143,8 +143,8 @@ class MappingServer {
   ros::Publisher status_pub_, diagnostics_pub_;
   ros::ServiceServer save_srv_, load_srv_, reset_srv_, clear_srv_, clear_box_srv_, query_srv_;
   ros::Timer publish_timer_, status_timer_;
+  boost::recursive_mutex reconfigure_mutex_;  // before the server that locks it
   std::unique_ptr<dynamic_reconfigure::Server<MappingConfig>> reconfigure_server_;
-  boost::recursive_mutex reconfigure_mutex_;
 
   std::mutex status_mutex_;  // status_ and last_diagnosed_: every thread updates counters
   MappingStatus status_, last_diagnosed_;
