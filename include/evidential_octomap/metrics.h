@@ -79,6 +79,16 @@ struct Answer {
   std::vector<float> uncertainty;  // kUncertaintyOutputs, when labelled
 };
 
+// What one query contributed, kept for resampling (paired_bootstrap.h): gt -1 = not counted
+// (ignore class or out of range), label -1 = no label, brier = the query's Brier term.
+struct QueryOutcome {
+  int16_t gt = -1, label = -1;
+  float brier = 0.0f;
+};
+
+// The Brier term sum_c (p^c - 1[c = gt])^2 of one answer (no label or no p: uniform 1/C).
+double brierScore(int gt, const Answer& answer, int num_classes);
+
 // The answer of a voxel opinion read with `rule` (label -1: no label).
 Answer answerOf(const VoxelOpinion& opinion, const FusionRule& rule);
 // The answer of one point's evidence: its own subjective opinion (b = e/S, u = C/S, p = alpha/S),
@@ -147,14 +157,16 @@ struct MapMetrics {
   double semantic_coverage = 0.0;   // labelled / queries (paper O.Acc)
 };
 
+// `outcomes`, when given, receives one QueryOutcome per query (same order as `queries`).
 MapMetrics evaluateMap(const EvidentialOcTree& tree, const std::vector<Query>& queries,
-                       int ignore_class);
+                       int ignore_class, std::vector<QueryOutcome>* outcomes = nullptr);
 
 // The input's per-point metrics on the same queries: `evidence` holds C values per query
 // (same order), or is empty for hard predictions only (then p is one-hot on Query::predicted
 // and every uncertainty output is 0).
 QualityMetrics evaluateInput(const std::vector<Query>& queries, const std::vector<float>& evidence,
-                             int num_classes, int ignore_class);
+                             int num_classes, int ignore_class,
+                             std::vector<QueryOutcome>* outcomes = nullptr);
 
 // Occupied voxels (leaves at full depth; pruned leaves count every voxel they cover) that hold
 // no ray end point of `endpoints`: what densification or a kernel adds as occupied.

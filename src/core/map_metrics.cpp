@@ -56,17 +56,33 @@ Answer answerOfEvidence(const float* evidence, int num_classes) {
   return answerOf(kDempster->readout(payload.data(), num_classes), *kDempster);
 }
 
+namespace {
+// Records one query's outcome when the caller asked for them (uncounted queries keep gt -1).
+void record(std::vector<QueryOutcome>* outcomes, size_t i, int gt, const Answer& a,
+            int num_classes) {
+  if (outcomes == nullptr) return;
+  QueryOutcome& out = (*outcomes)[i];
+  out.gt = int16_t(gt);
+  out.label = int16_t(a.label >= 0 && a.label < num_classes ? a.label : -1);
+  out.brier = float(brierScore(gt, a, num_classes));
+}
+}  // namespace
+
 MapMetrics evaluateMap(const EvidentialOcTree& tree, const std::vector<Query>& queries,
-                       int ignore_class) {
+                       int ignore_class, std::vector<QueryOutcome>* outcomes) {
   const int num_classes = tree.numClasses();
   MapMetrics m;
   QualityAccumulator acc(num_classes, ignore_class);
-  for (const Query& q : queries) {
+  if (outcomes != nullptr) outcomes->assign(queries.size(), QueryOutcome());
+  for (size_t i = 0; i < queries.size(); ++i) {
+    const Query& q = queries[i];
     if (q.gt < 0 || q.gt >= num_classes || q.gt == ignore_class) continue;
     const EvidentialOcTreeNode* node = tree.nodeAt(q.point_W);
     if (node != nullptr && tree.isNodeOccupied(node)) ++m.occupied;
     const bool labelled = node != nullptr && node->hasSemantics();
-    acc.add(q.gt, labelled ? answerOf(tree.opinion(node), tree.rule()) : Answer());
+    const Answer a = labelled ? answerOf(tree.opinion(node), tree.rule()) : Answer();
+    acc.add(q.gt, a);
+    record(outcomes, i, q.gt, a, num_classes);
   }
   m.quality = acc.finish();
   const double n = double(m.quality.queries);
@@ -76,9 +92,11 @@ MapMetrics evaluateMap(const EvidentialOcTree& tree, const std::vector<Query>& q
 }
 
 QualityMetrics evaluateInput(const std::vector<Query>& queries, const std::vector<float>& evidence,
-                             int num_classes, int ignore_class) {
+                             int num_classes, int ignore_class,
+                             std::vector<QueryOutcome>* outcomes) {
   QualityAccumulator acc(num_classes, ignore_class);
   const bool has_evidence = evidence.size() == queries.size() * size_t(num_classes);
+  if (outcomes != nullptr) outcomes->assign(queries.size(), QueryOutcome());
   for (size_t i = 0; i < queries.size(); ++i) {
     const Query& q = queries[i];
     Answer a;
@@ -91,6 +109,8 @@ QualityMetrics evaluateInput(const std::vector<Query>& queries, const std::vecto
       a.uncertainty.assign(kUncertaintyOutputs.size(), 0.0f);
     }
     acc.add(q.gt, a);
+    const bool counted = q.gt >= 0 && q.gt < num_classes && q.gt != ignore_class;
+    if (counted) record(outcomes, i, q.gt, a, num_classes);
   }
   return acc.finish();
 }

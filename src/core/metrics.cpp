@@ -15,6 +15,20 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kMinProbability = 1e-6;  // NLL clip
 }  // namespace
 
+double brierScore(int gt, const Answer& a, int num_classes) {
+  const bool labelled = a.label >= 0 && a.label < num_classes;
+  if (!labelled || a.probability.empty()) {
+    const double uniform = 1.0 / num_classes;
+    return (1.0 - uniform) * (1.0 - uniform) + (num_classes - 1) * uniform * uniform;
+  }
+  double brier = 0.0;
+  for (int c = 0; c < num_classes; ++c) {
+    const double p = a.probability[c];
+    brier += (p - (c == gt)) * (p - (c == gt));
+  }
+  return brier;
+}
+
 // --- ConfusionMatrix ----------------------------------------------------------------------
 
 ConfusionMatrix::ConfusionMatrix(int num_classes) : num_classes_(num_classes) {
@@ -173,19 +187,12 @@ void QualityAccumulator::add(int gt, const Answer& a) {
   m_.all.add(gt, label);
   // Projected probabilities (uniform without an answer): Brier, NLL, confidence.
   const double uniform = 1.0 / num_classes_;
-  double brier = 0.0, confidence = uniform, p_gt = uniform;
+  double confidence = uniform, p_gt = uniform;
   if (label >= 0 && !a.probability.empty()) {
-    confidence = 0.0;
-    for (int c = 0; c < num_classes_; ++c) {
-      const double p = a.probability[c];
-      brier += (p - (c == gt)) * (p - (c == gt));
-      confidence = std::max(confidence, p);
-    }
+    confidence = *std::max_element(a.probability.begin(), a.probability.end());
     p_gt = a.probability[gt];
-  } else {
-    brier = (1.0 - uniform) * (1.0 - uniform) + (num_classes_ - 1) * uniform * uniform;
   }
-  brier_sum_ += brier;
+  brier_sum_ += brierScore(gt, a, num_classes_);
   nll_sum_ -= std::log(std::max(p_gt, kMinProbability));
   const bool correct = label == gt;
   ReliabilityBin& bin = bins_[std::min(kBins - 1, int(confidence * kBins))];

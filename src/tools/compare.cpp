@@ -1,17 +1,20 @@
 // `evidential_octomap compare`: every fusion rule and the paper's Table II ablation on the same
 // data, evidence and queries; one markdown table per dataset/protocol, plus JSON. Also the
 // RELLIS-3D scan with synthetic noisy predictions (off-road class set).
+#include <algorithm>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
 
+#include "bootstrap_report.h"
 #include "commands.h"
 #include "dataset.h"
 #include "pipeline.h"
 #include "report.h"
 #include "synthetic.h"
+#include "voxel_majority.h"
 
 namespace fs = std::filesystem;
 
@@ -42,6 +45,7 @@ struct CompareOptions {
   double resolution = 0.2;
   EvidenceOptions evidence;
   bool quiet = false;
+  BootstrapSettings bootstrap;
   std::string plan = "default";
   bool explicit_selection = false;  // --sources/--variants/--protocols given: full cross product
 };
@@ -136,8 +140,8 @@ SemanticConfig variantConfig(const std::string& variant, const SemanticConfig& b
 
 // Plans. default (the demo; about 10 min on 2 cores): every variant with onehot evidence (the
 // peers' setup in BENCHMARKS.md); dempster and dempster-paper for knn-vote and confusion
-// (what each source does to the paper's uncertainty mechanisms); held-out: dempster, sbki, ebs with onehot.
-// extended: also sbki and ebs with knn-vote and confusion. full: every variant x source x
+// (what each source does to the paper's uncertainty mechanisms); held-out: dempster, sbki, ebs with
+// onehot. extended: also sbki and ebs with knn-vote and confusion. full: every variant x source x
 // protocol. Giving --sources/--variants/--protocols runs exactly their cross product.
 std::vector<std::string> plannedVariants(const CompareOptions& o, const std::string& protocol,
                                          const std::string& source) {
@@ -156,7 +160,54 @@ struct Section {
   std::vector<std::string> notes;
   std::vector<std::string> rows;            // accuracy and calibration
   std::vector<std::string> detection_rows;  // error detection
+  std::vector<std::string> bootstrap_rows;  // each row against default dempster
 };
+
+// A row kept for the paired bootstrap: its name and block statistics.
+struct ScoredRow {
+  std::string name;
+  BlockScores scores;
+};
+
+// The reference rows of voxel_majority.h (no kernel, no rule): the majority of the mapped
+// points' predictions, and of their GT, in each query's voxel.
+std::vector<ScoredRow> addVoxelMajorityRows(const std::vector<Scan>& scans,
+                                            const Protocol& protocol,
+                                            const std::vector<Query>& queries,
+                                            const ClassTable& classes, double resolution,
+                                            const BootstrapReport& bootstrap, Section* sec) {
+  std::vector<ScoredRow> out;
+  const std::pair<MajorityOf, const char*> kinds[] = {
+      {MajorityOf::kPredictions, "voxel majority of the mapped points' predictions (reference)"},
+      {MajorityOf::kGroundTruth, "voxel majority of the mapped points' GT (resolution ceiling)"}};
+  for (const auto& [what, name] : kinds) {
+    const std::vector<Query> answered =
+        voxelMajorityAnswers(scans, protocol.map_scans, queries, resolution, classes.numClasses(),
+                             classes.ignore_class, what);
+    std::vector<QueryOutcome> outcomes;
+    const QualityMetrics q =
+        evaluateInput(answered, {}, classes.numClasses(), classes.ignore_class, &outcomes);
+    sec->rows.push_back(std::string("| – | ") + name + " | | |" +
+                        qualityCells(q, q.queries ? double(q.labelled) / q.queries : NAN, NAN) +
+                        " – | – | – |");
+    out.push_back({name, bootstrap.scores(outcomes)});
+  }
+  return out;
+}
+
+// Every scored row of one evidence source against its `dempster` run (when there is one).
+void addBootstrapRows(const std::string& source, const std::vector<ScoredRow>& rows,
+                      const BootstrapReport& bootstrap, const nlohmann::json& context, Section* sec,
+                      nlohmann::json* json) {
+  const auto reference = std::find_if(rows.begin(), rows.end(),
+                                      [](const ScoredRow& r) { return r.name == "dempster"; });
+  if (reference == rows.end()) return;
+  for (const ScoredRow& r : rows) {
+    if (&r == &*reference) continue;
+    bootstrap.compare(source, r.name, r.scores, reference->scores, context, &sec->bootstrap_rows,
+                      json);
+  }
+}
 
 const char* kLead = " evidence | method | Adap. | Thr. |";
 const char* kTail = " ms/scan | dropped % | classes lost (map IoU 0, input > 0) |";
@@ -195,10 +246,14 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
                 const std::string& data_path, const ClassTable& classes,
                 const std::vector<Scan>& scans, const std::string& protocol_name,
                 const std::vector<std::string>& sources, const std::string& predictions_note,
-                std::vector<Section>* sections, nlohmann::json* json) {
+                std::vector<Section>* sections, nlohmann::json* json,
+                nlohmann::json* bootstrap_json) {
   const Protocol protocol = makeProtocol(protocol_name, scans.size());
   const std::vector<Query> queries =
       buildQueries(scans, protocol.query_scans, classes.ignore_class);
+  const int num_classes = classes.numClasses();
+  const BootstrapReport bootstrap(queries, num_classes, classes.ignore_class, o.bootstrap);
+  const nlohmann::json context = {{"dataset_label", dataset_label}, {"protocol", protocol.name}};
   Section sec;
   std::ostringstream title;
   title << dataset_label << ", protocol **" << protocol.name << "**: map scans "
@@ -208,10 +263,18 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
         << " GT-labelled points, class " << classes.names[classes.ignore_class] << " excluded)";
   sec.title = title.str();
   if (!predictions_note.empty()) sec.notes.push_back("Predictions: " + predictions_note + ".");
+  sec.notes.push_back(bootstrap.describe() + ".");
+  std::vector<QueryOutcome> outcomes;
   const QualityMetrics hard =
-      evaluateInput(queries, {}, classes.numClasses(), classes.ignore_class);
+      evaluateInput(queries, {}, num_classes, classes.ignore_class, &outcomes);
   sec.rows.push_back("| – | input predictions (hard labels), per point | | |" +
                      qualityCells(hard, NAN, NAN) + " – | – | – |");
+  std::vector<ScoredRow> shared_rows{
+      {"input predictions (hard labels)", bootstrap.scores(outcomes)}};
+  for (ScoredRow& r :
+       addVoxelMajorityRows(scans, protocol, queries, classes, o.resolution, bootstrap, &sec)) {
+    shared_rows.push_back(std::move(r));
+  }
 
   for (const std::string& source_name : sources) {
     const std::vector<std::string> variants = plannedVariants(o, protocol.name, source_name);
@@ -229,7 +292,9 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
     std::vector<float> query_evidence;
     buildQueries(scans, protocol.query_scans, classes.ignore_class, &evidence, &query_evidence);
     const QualityMetrics input =
-        evaluateInput(queries, query_evidence, classes.numClasses(), classes.ignore_class);
+        evaluateInput(queries, query_evidence, num_classes, classes.ignore_class, &outcomes);
+    std::vector<ScoredRow> scored = shared_rows;
+    scored.push_back({"input " + source_name + " evidence, per point", bootstrap.scores(outcomes)});
     sec.rows.push_back("| " + source_name + " | " + inputDescription(ev) + " | | |" +
                        qualityCells(input, NAN, NAN) + " – | – | – |");
     sec.detection_rows.push_back("| " + source_name + " | " + inputDescription(ev) + " | | |" +
@@ -253,7 +318,8 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
       r.predictions_note = predictions_note;
       r.config = config;
       r.resolution = o.resolution;
-      r.map = evaluateMap(*run.tree, queries, classes.ignore_class);
+      r.map = evaluateMap(*run.tree, queries, classes.ignore_class, &outcomes);
+      scored.push_back({v, bootstrap.scores(outcomes)});
       r.input = input;
       r.input_description = inputDescription(ev);
       r.occupied_without_endpoint =
@@ -279,12 +345,13 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
       json->push_back(j);
       if (!o.quiet) std::cerr << row.str() << "\n";
     }
+    addBootstrapRows(source_name, scored, bootstrap, context, &sec, bootstrap_json);
   }
   sections->push_back(sec);
 }
 
 void runCompare(const CompareOptions& o) {
-  nlohmann::json runs = nlohmann::json::array();
+  nlohmann::json runs = nlohmann::json::array(), bootstrap = nlohmann::json::array();
   std::vector<Section> sections;
 
   const ClassTable classes = ClassTable::load(o.classes);
@@ -301,7 +368,8 @@ void runCompare(const CompareOptions& o) {
                                            : "");
   for (const std::string& p : o.protocols) {
     if (p == "held-out" && scans.size() < 2) continue;
-    runSection(with_model, label, o.data, classes, scans, p, sources, "", &sections, &runs);
+    runSection(with_model, label, o.data, classes, scans, p, sources, "", &sections, &runs,
+               &bootstrap);
   }
 
   std::string rellis_note;
@@ -329,7 +397,7 @@ void runCompare(const CompareOptions& o) {
                  "RELLIS-3D " + fs::path(rdata).filename().string() +
                      " (single scan, identity pose, SYNTHETIC predictions)",
                  rdata, rtable, rscans, "reconstruction", rsources, o.noise.describe(), &sections,
-                 &runs);
+                 &runs, &bootstrap);
       sections.back().notes.push_back(
           "Evidence `confusion` is not run here: one scan leaves no other scan to estimate the "
           "confusion matrix on; `learned` neither (no model is trained for this class set, "
@@ -366,6 +434,12 @@ void runCompare(const CompareOptions& o) {
     for (const auto& r : s.rows) md << r << "\n";
     md << "\nError detection among labelled queries:\n\n" << detectionHeader(kLead);
     for (const auto& r : s.detection_rows) md << r << "\n";
+    if (!s.bootstrap_rows.empty()) {
+      md << "\nPaired bootstrap against default `dempster` (Δ = row − dempster; mIoU over all "
+            "queries in points, Brier lower is better):\n\n"
+         << BootstrapReport::header();
+      for (const auto& r : s.bootstrap_rows) md << r << "\n";
+    }
     md << "\n";
   }
   if (!rellis_note.empty()) md << rellis_note << "\n";
@@ -374,6 +448,7 @@ void runCompare(const CompareOptions& o) {
   writeText(o.out + "/compare.md", md.str());
   nlohmann::json all;
   all["runs"] = runs;
+  all["bootstrap"] = bootstrap;
   writeText(o.out + "/compare.json", all.dump(2) + "\n");
   std::cout << md.str() << "wrote " << o.out << "/{compare.md,compare.json}\n";
 }
@@ -387,7 +462,10 @@ void addCompareCommand(CLI::App& app) {
       "Run dempster, its Table II ablations (w/o adaptive length, w/o threshold, w/o both), "
       "reference_compat, sbki and ebs on the same data, evidence and queries; print one "
       "markdown table per dataset/protocol and write compare.md + compare.json. Also runs the "
-      "RELLIS-3D scan with synthetic noisy predictions");
+      "RELLIS-3D scan with synthetic noisy predictions. Each table has two reference rows "
+      "without a kernel (the voxel majority of the mapped points' predictions, and of their GT) "
+      "and a paired spatial-block bootstrap of every row's mIoU(all) and Brier difference to "
+      "default dempster");
   addDataOptions(cmd, &o->data, "SemanticKITTI-layout directory", &o->classes);
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
@@ -456,6 +534,16 @@ void addCompareCommand(CLI::App& app) {
                   "extended: also sbki and ebs for knn-vote and confusion; full: every variant x "
                   "source x protocol")
       ->check(CLI::IsMember({"default", "extended", "full"}))
+      ->capture_default_str();
+  cmd->add_option("--bootstrap-replicates", o->bootstrap.replicates,
+                  "Replicates of the paired bootstrap against default dempster")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  cmd->add_option("--bootstrap-block", o->bootstrap.block_size,
+                  "Side [m] of the square x-y blocks the bootstrap resamples")
+      ->check(CLI::Range(0.01, 1e6))
+      ->capture_default_str();
+  cmd->add_option("--bootstrap-seed", o->bootstrap.seed, "Seed of the bootstrap draws")
       ->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bars or per-run lines on stderr");
   cmd->callback([o, cmd]() {

@@ -366,6 +366,45 @@ TEST(CliCompare, VariantOverridesMakeAnAblationRow) {
   EXPECT_EQ(double(runs[0]["parameters"]["evidence_cap"]), 2.0);
 }
 
+// compare's paired bootstrap: one entry per row against default dempster, whose estimate is
+// the difference of the two runs' own metrics (independently computed by the map metrics), inside
+// its interval; the voxel-majority reference rows are among them.
+TEST(CliCompare, BootstrapEntriesMatchTheRunsDifferences) {
+  const std::string dir = freshDir("cli_compare_bootstrap");
+  const Result r = run("compare -q --no-rellis --scans 1 --sources onehot --protocols "
+                       "reconstruction --variants dempster,ebs --bootstrap-replicates 200 --data " +
+                       kittiDir() + " --classes " + kittiClasses() + " --out " + dir);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto all = readJson(dir + "/compare.json");
+  const auto& runs = all["runs"];
+  ASSERT_EQ(runs.size(), 2u);
+  const auto metric = [&](const std::string& variant, const char* key) {
+    for (const auto& run : runs)
+      if (run["variant_id"] == variant) return double(run["map"][key]);
+    ADD_FAILURE() << variant;
+    return 0.0;
+  };
+  bool ebs_seen = false, majority_seen = false;
+  for (const auto& b : all["bootstrap"]) {
+    EXPECT_EQ(b["reference"], "dempster");
+    EXPECT_EQ(int(b["replicates"]), 200);
+    for (const char* key : {"miou_all_difference", "brier_difference"}) {
+      EXPECT_LE(double(b[key]["lower"]), double(b[key]["estimate"]) + 1e-12) << b.dump();
+      EXPECT_GE(double(b[key]["upper"]), double(b[key]["estimate"]) - 1e-12) << b.dump();
+    }
+    majority_seen |= std::string(b["row"]).find("voxel majority") != std::string::npos;
+    if (b["row"] != "ebs") continue;
+    ebs_seen = true;
+    EXPECT_NEAR(double(b["miou_all_difference"]["estimate"]),
+                metric("ebs", "miou_all_queries") - metric("dempster", "miou_all_queries"), 1e-9);
+    EXPECT_NEAR(double(b["brier_difference"]["estimate"]),
+                metric("ebs", "brier") - metric("dempster", "brier"), 1e-6);
+  }
+  EXPECT_TRUE(ebs_seen);
+  EXPECT_TRUE(majority_seen);
+  EXPECT_NE(r.output.find("Paired bootstrap"), std::string::npos);  // compare.md, printed
+}
+
 TEST(CliRellis, WithoutPredictionsAsksForSyntheticOnes) {
   const Result r = run("map --quiet --data " + rellisDir() + " --classes " + rellisClasses() +
                        " --out " + freshDir("cli_rellis_none"));

@@ -1,0 +1,25 @@
+// Reference rows that bound what a voxel map can reach on the same queries, without any kernel:
+// each query's voxel (at the map resolution) is labelled by the majority class of the mapped
+// scans' points that fall in it, counting either their predictions (what any rule fed with
+// one-hot evidence from those hard labels sees in that voxel) or their GT (the resolution's
+// ceiling: the best label a voxel can have). Ties go to the lowest class index; a voxel without
+// a counted point gives no label.
+#pragma once
+
+#include <vector>
+
+#include "dataset.h"
+#include "evidential_octomap/metrics.h"
+
+namespace evidential_octomap::tools {
+
+enum class MajorityOf { kPredictions, kGroundTruth };
+
+// `queries` with Query::predicted replaced by the majority label of the query's voxel (-1: no
+// mapped point there). Points of the ignore class (by the counted label) are not counted.
+std::vector<Query> voxelMajorityAnswers(const std::vector<Scan>& scans,
+                                        const std::vector<size_t>& map_scans,
+                                        const std::vector<Query>& queries, double resolution,
+                                        int num_classes, int ignore_class, MajorityOf what);
+
+}  // namespace evidential_octomap::tools
