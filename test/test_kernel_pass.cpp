@@ -15,6 +15,7 @@
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/kernel.h"
 #include "fast_log1p.h"
+#include "fusion_contributions.h"
 #include "kernel_pass.h"
 #include "random_masses.h"
 #include "synthetic_scene.h"
@@ -220,6 +221,38 @@ TEST(FastLog1p, StoredDempsterEvidenceStaysWithinFloatRoundingOfLibm) {
   }
   EXPECT_NEAR(total, kMaxStoredLogEvidence, 1e-3);
   RecordProperty("steps_one_rounding_apart", std::to_string(differing_steps));
+}
+
+// A row of the kernel loop accumulates many contributions as a running product: it must give
+// the sum of libm's log1p of each, also when the product passes what a double holds (huge
+// evidence: folded into the log on the way).
+TEST(DempsterContribution, RowOfManyContributionsEqualsTheSumOfLog1p) {
+  const int num_classes = 5;
+  test::RandomMasses rnd(3);
+  for (double magnitude : {0.01, 20.0, 1e6, 3e38}) {
+    std::vector<double> row(DempsterContribution::kRowWidth * num_classes, 0.0);
+    std::vector<double> direct(num_classes, 0.0);
+    for (int n = 0; n < 2000; ++n) {
+      std::vector<float> e(num_classes, 0.0f);
+      e[n % num_classes] = float(rnd.uniform(0.0, magnitude));  // sparse ...
+      if (n % 3 == 0) {
+        for (float& x : e) x = float(rnd.uniform(0.0, magnitude / 1e3));  // ... and dense
+      }
+      PointOpinion o;
+      o.evidence = e.data();
+      o.strength = num_classes;
+      for (float x : e) o.strength += x;
+      const double k = rnd.uniform(0.0, 1.2);
+      DempsterContribution(o, num_classes)(k, row.data());
+      contributeDirectly(FusionRuleType::kDempster, o, k, num_classes, direct.data());
+    }
+    DempsterContribution::finish(row.data(), num_classes);
+    for (int c = 0; c < num_classes; ++c) {
+      ASSERT_TRUE(std::isfinite(row[c])) << magnitude;
+      EXPECT_NEAR(row[c], direct[c], 1e-12 * direct[c])
+          << "magnitude " << magnitude << " class " << c;
+    }
+  }
 }
 
 }  // namespace

@@ -34,7 +34,7 @@ class DempsterRule : public FusionRule {
 
   void contribute(const PointOpinion& point, double k, int num_classes,
                   double* increments) const override {
-    DempsterContribution(point, num_classes)(k, increments);
+    contributeOnce<DempsterContribution>(point, k, num_classes, increments);
   }
 
   void add(float* payload, const double* increments, int num_classes) const override {
@@ -128,7 +128,7 @@ class SbkiRule : public DirichletRule {
   bool usesUncertaintyKernel() const override { return false; }
   void contribute(const PointOpinion& point, double k, int num_classes,
                   double* increments) const override {
-    SbkiContribution(point, num_classes)(k, increments);
+    contributeOnce<SbkiContribution>(point, k, num_classes, increments);
   }
 };
 
@@ -139,7 +139,7 @@ class EbsRule : public DirichletRule {
   bool usesUncertaintyKernel() const override { return true; }
   void contribute(const PointOpinion& point, double k, int num_classes,
                   double* increments) const override {
-    EbsContribution(point, num_classes)(k, increments);
+    contributeOnce<EbsContribution>(point, k, num_classes, increments);
   }
 };
 

@@ -73,6 +73,32 @@ void KernelPass::scatter(const KernelPoint& point, const octomap::point3d& posit
 }
 
 template <class Contribution>
+void finishRowsWith(int num_classes, KernelRows* out) {
+  if constexpr (Contribution::kRowWidth > 1) {
+    const size_t width = size_t(Contribution::kRowWidth) * num_classes;
+    const size_t rows = out->touched.size();
+    for (size_t r = 0; r < rows; ++r) {
+      double* row = &out->rows[r * width];
+      Contribution::finish(row, num_classes);
+      // Row r moves to r * C: below its old place, and past every row already moved.
+      std::copy(row, row + num_classes, &out->rows[r * num_classes]);
+    }
+    out->rows.resize(rows * num_classes);
+  }
+}
+
+void KernelPass::finishRows(KernelRows* out) const {
+  switch (rule_.type()) {
+    case FusionRuleType::kDempster:
+      return finishRowsWith<DempsterContribution>(num_classes_, out);
+    case FusionRuleType::kSbki:
+      return finishRowsWith<SbkiContribution>(num_classes_, out);
+    case FusionRuleType::kEbs:
+      return finishRowsWith<EbsContribution>(num_classes_, out);
+  }
+}
+
+template <class Contribution>
 void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& point,
                              const octomap::point3d& position, const octomap::OcTreeKey& base,
                              KernelRows* out) const {
@@ -100,6 +126,7 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
       axis[a][o] = gap * gap * inv_length2;
     }
   }
+  const size_t width = size_t(Contribution::kRowWidth) * num_classes_;
   const int x0 = int(point.key[0]) - int(base[0]), y0 = int(point.key[1]) - int(base[1]),
             z0 = int(point.key[2]) - int(base[2]);
   for (int ox = lo[0]; ox <= hi[0]; ++ox) {
@@ -118,9 +145,9 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
         if (row == KernelRows::kNone) {
           row = static_cast<uint32_t>(out->touched.size());
           out->touched.push_back(local);
-          out->rows.resize(out->rows.size() + num_classes_, 0.0);
+          out->rows.resize(out->rows.size() + width, 0.0);
         }
-        contribute(k, &out->rows[size_t(row) * num_classes_]);
+        contribute(k, &out->rows[size_t(row) * width]);
       }
     }
   }

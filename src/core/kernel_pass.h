@@ -58,9 +58,9 @@ struct KernelRows {
   // others (behind surfaces, under the ground: about half the support) are not computed.
   std::vector<uint64_t> mask;
   bool masked = false;
-  std::vector<uint32_t> index;    // local voxel -> row, kNone when untouched
-  std::vector<uint32_t> touched;  // local voxels with a row, in row order
-  std::vector<double> rows;
+  std::vector<uint32_t> index;     // local voxel -> row, kNone when untouched
+  std::vector<uint32_t> touched;   // local voxels with a row, in row order
+  std::vector<double> rows;        // while scattering: the contribution's row width, then C
   std::vector<double> axis_terms;  // per-axis d^2 terms of the point at hand
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
 };
@@ -77,6 +77,9 @@ class KernelPass {
   // (64^3 voxels, kSubtreeLevels) into `rows`.
   void scatter(const KernelPoint& point, const octomap::point3d& position,
                const octomap::OcTreeKey& base, KernelRows* rows) const;
+  // After the last scatter into `rows`: C increments per row (KernelRows::rows), as the rule's
+  // add() takes them.
+  void finishRows(KernelRows* rows) const;
 
  private:
   // The loop itself, for one rule's contribution (fusion_contributions.h): inlined, no virtual

@@ -157,6 +157,7 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
     const uint32_t j = point_subtrees_[p].second;
     kernel_->scatter((*kernel_points_)[j], points_->positions[j], base, &kernel);
   }
+  kernel_->finishRows(&kernel);
   t.order.clear();
   for (uint32_t row = 0; row < kernel.touched.size(); ++row) {
     const uint32_t local = kernel.touched[row];
