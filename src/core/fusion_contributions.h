@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
@@ -40,26 +41,29 @@ class DempsterContribution {
     // Extended belief b~ = k b, u~ = 1 - k (1 - u); e_hat / C = b~ / u~ = k e / (S (1 - k) + k C),
     // written so that huge S (evidence near FLT_MAX) does not cancel to 0 at k = 1.
     const double factor = k / (strength_ * (1.0 - k) + k * num_classes_);
-    double* y = row + num_classes_;
+    double* __restrict y = row + num_classes_;
+    uint64_t seen = 0;                // the bits of every new y ORed: its exponent bounds theirs
     if (2 * count_ > num_classes_) {  // dense: one contiguous loop the compiler vectorises
-      for (int c = 0; c < num_classes_; ++c) {
-        const double x = evidence_[c] * factor;  // 0 for a class without evidence: y unchanged
-        y[c] += x + x * y[c];
+      const double* __restrict evidence = evidence_;
+      const int n = num_classes_;
+      for (int c = 0; c < n; ++c) {
+        const double x = evidence[c] * factor;  // 0 for a class without evidence: y unchanged
+        seen |= update(y + c, x);
       }
     } else {
       for (int i = 0; i < count_; ++i) {
         const int c = classes_[i];
-        const double x = evidence_[c] * factor;
-        y[c] += x + x * y[c];
+        seen |= update(y + c, evidence_[c] * factor);
       }
     }
-    // y grows by at most a factor 1 + FLT_MAX per contribution: fold it into the log before
-    // it could overflow.
-    for (int i = 0; i < count_; ++i) {
-      const int c = classes_[i];
-      if (y[c] > kFoldAbove) {
-        row[c] += fastLog1p(y[c]);
-        y[c] = 0.0;
+    // y grows by at most a factor 1 + FLT_MAX (2^128) per contribution: folded into the log at
+    // 2^664 it stays far from overflow.
+    if ((seen >> 52) >= kFoldExponent) {
+      for (int c = 0; c < num_classes_; ++c) {
+        if (y[c] >= kFoldAbove) {
+          row[c] += fastLog1p(y[c]);
+          y[c] = 0.0;
+        }
       }
     }
   }
@@ -69,7 +73,16 @@ class DempsterContribution {
   }
 
  private:
-  static constexpr double kFoldAbove = 1e200;
+  static constexpr double kFoldAbove = 0x1p664;
+  static constexpr uint64_t kFoldExponent = 1023 + 664;  // biased exponent of kFoldAbove
+  // y += x + x y; returns the new y's bits (y >= 0: no sign bit).
+  static uint64_t update(double* y, double x) {
+    const double next = *y + (x + x * *y);
+    *y = next;
+    uint64_t bits;
+    std::memcpy(&bits, &next, sizeof bits);
+    return bits;
+  }
   double strength_;
   int num_classes_;
   int count_ = 0;  // classes with evidence: the first count_ entries of classes_

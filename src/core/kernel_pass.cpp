@@ -129,17 +129,21 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
   const size_t width = size_t(Contribution::kRowWidth) * num_classes_;
   const int x0 = int(point.key[0]) - int(base[0]), y0 = int(point.key[1]) - int(base[1]),
             z0 = int(point.key[2]) - int(base[2]);
-  for (int ox = lo[0]; ox <= hi[0]; ++ox) {
-    const double sx = axis[0][ox];
-    if (sx >= 1.0) continue;
+  // x innermost: consecutive voxels of a mask word, the index and (mostly) the rows.
+  for (int oz = lo[2]; oz <= hi[2]; ++oz) {
+    const double sz = axis[2][oz];
+    if (sz >= 1.0) continue;
     for (int oy = lo[1]; oy <= hi[1]; ++oy) {
-      const double sxy = sx + axis[1][oy];
-      if (sxy >= 1.0) continue;
-      for (int oz = lo[2]; oz <= hi[2]; ++oz) {
-        const uint32_t local =
-            uint32_t((z0 + oz) << (2 * kSubtreeLevels) | (y0 + oy) << kSubtreeLevels | (x0 + ox));
-        if (out->masked && !(out->mask[local >> kSubtreeLevels] >> (x0 + ox) & 1u)) continue;
-        const double k = table_(sxy + axis[2][oz]);
+      const double syz = sz + axis[1][oy];
+      if (syz >= 1.0) continue;
+      const uint32_t line = uint32_t((z0 + oz) << kSubtreeLevels | (y0 + oy));
+      const uint64_t kept = out->masked ? out->mask[line] : ~uint64_t(0);
+      if (kept == 0) continue;
+      for (int ox = lo[0]; ox <= hi[0]; ++ox) {
+        if (!(kept >> (x0 + ox) & 1u)) continue;
+        const uint32_t local = line << kSubtreeLevels | uint32_t(x0 + ox);
+        // Summed as (x + y) + z, whatever the loop order, so the rounding never depends on it.
+        const double k = table_((axis[0][ox] + axis[1][oy]) + sz);
         if (k <= 0.0) continue;
         uint32_t& row = out->index[local];
         if (row == KernelRows::kNone) {
