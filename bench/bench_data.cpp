@@ -1,5 +1,8 @@
 #include "bench_data.h"
 
+#include <evidential_octomap/class_table.h>
+#include <evidential_octomap/learned_evidence.h>
+#include <evidential_octomap/subjective_logic.h>
 #include <sys/resource.h>
 #include <time.h>
 
@@ -10,9 +13,6 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
-
-#include <evidential_octomap/class_table.h>
-#include <evidential_octomap/subjective_logic.h>
 
 namespace evbench {
 namespace {
@@ -108,7 +108,8 @@ std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& c
   std::vector<Scan> scans;
   std::string line;
   for (int i = 0; i < count; ++i) {
-    if (!std::getline(poses, line)) throw std::runtime_error("poses.txt has fewer lines than scans");
+    if (!std::getline(poses, line))
+      throw std::runtime_error("poses.txt has fewer lines than scans");
     const auto v = parseNumbers(line);
     if (v.size() != 12) throw std::runtime_error("poses.txt line " + std::to_string(i + 1));
     const Mat4 t = multiply(tr_inv, multiply(fromRow12(v), tr));  // T_world_velo
@@ -122,8 +123,12 @@ std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& c
     const size_t n = labels.size();
     scan.points_W.reserve(n);
     scan.classes.resize(n);
+    scan.xyz_S.resize(3 * n);
+    scan.remission.resize(n);
     for (size_t j = 0; j < n; ++j) {
       const double x = xyzi[4 * j], y = xyzi[4 * j + 1], z = xyzi[4 * j + 2];
+      std::copy(&xyzi[4 * j], &xyzi[4 * j + 3], &scan.xyz_S[3 * j]);
+      scan.remission[j] = xyzi[4 * j + 3];
       scan.points_W.push_back(float(t[0] * x + t[1] * y + t[2] * z + t[3]),
                               float(t[4] * x + t[5] * y + t[6] * z + t[7]),
                               float(t[8] * x + t[9] * y + t[10] * z + t[11]));
@@ -143,6 +148,33 @@ std::vector<float> derivedEvidence(const std::vector<int>& classes, int num_clas
                                           &evidence[i * num_classes]);
   }
   return evidence;
+}
+
+std::vector<float> learnedEvidence(const Scan& scan, const std::string& model_path,
+                                   int num_classes) {
+  static std::string loaded_path;
+  static evidential_octomap::LearnedEvidenceModel model;
+  if (loaded_path != model_path) {
+    model = evidential_octomap::LearnedEvidenceModel::load(model_path);
+    loaded_path = model_path;
+  }
+  if (model.numClasses() != num_classes) {
+    throw std::runtime_error(model_path + " has " + std::to_string(model.numClasses()) +
+                             " classes, the class table " + std::to_string(num_classes));
+  }
+  evidential_octomap::ScanInput in;
+  in.xyz = scan.xyz_S.data();
+  in.remission = scan.remission.data();
+  in.predicted = scan.classes.data();
+  in.num_points = scan.classes.size();
+  return model.evidence(in);
+}
+
+std::string defaultLearnedModel(const std::string& class_yaml) {
+  const auto classes = evidential_octomap::ClassTable::load(class_yaml);
+  const size_t slash = class_yaml.find_last_of('/');
+  const std::string dir = slash == std::string::npos ? "." : class_yaml.substr(0, slash);
+  return dir + "/learned/" + classes.dataset + ".model";
 }
 
 double median(std::vector<double> values) {

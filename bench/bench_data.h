@@ -2,12 +2,12 @@
 // timers and process memory. Nothing here is part of the library.
 #pragma once
 
+#include <octomap/Pointcloud.h>
+
 #include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <octomap/Pointcloud.h>
 
 namespace evbench {
 
@@ -22,6 +22,8 @@ struct Scan {
   octomap::Pointcloud points_W;
   octomap::point3d origin_W;
   std::vector<int> classes;
+  std::vector<float> xyz_S;      // N x 3, sensor frame (the learned model's features)
+  std::vector<float> remission;  // N
 };
 
 // Loads scans 0..count-1 of a SemanticKITTI-style folder (velodyne/, predictions/, poses.txt,
@@ -32,6 +34,12 @@ std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& c
 // "Derived" evidence: one-hot of the predicted class with magnitude `magnitude` (N x C).
 std::vector<float> derivedEvidence(const std::vector<int>& classes, int num_classes,
                                    float magnitude = 20.0f);
+
+// "Learned (cross-fitted)" evidence (N x C): the model file's folds not trained on the scan.
+std::vector<float> learnedEvidence(const Scan& scan, const std::string& model_path,
+                                   int num_classes);
+// The model file next to a class table: <its directory>/learned/<dataset>.model.
+std::string defaultLearnedModel(const std::string& class_yaml);
 
 double median(std::vector<double> values);
 

@@ -438,6 +438,64 @@ TEST(ScanIntegration, RowsOnlyForKeptVoxelsGiveTheSameMapBitForBit) {
   EXPECT_TRUE(compareTrees(masked, everywhere));
 }
 
+// semantic_occupied_only: into an empty map, exactly the end voxels get evidence, each the same
+// evidence as in the default map (a voxel's rows do not depend on which other voxels get rows);
+// a second scan adds evidence only to voxels occupied before it or holding its end points.
+TEST(ScanIntegration, SemanticOccupiedOnlyGivesEvidenceToOccupiedAndEndVoxelsOnly) {
+  SyntheticScene scene;
+  SemanticConfig all, occupied;
+  occupied.semantic_occupied_only = true;
+  EvidentialOcTree a(0.2, scene.num_classes, all), b(0.2, scene.num_classes, occupied);
+  const SyntheticScan first = scene.defaultScan(1);
+  a.insertSemanticScan(first.points_W, first.evidence, first.origin_W);
+  b.insertSemanticScan(first.points_W, first.evidence, first.origin_W);
+  std::set<KeyTuple> ends;
+  for (size_t i = 0; i < first.points_W.size(); ++i)
+    ends.insert(tupleOf(b.coordToKey(first.points_W.getPoint(i))));
+  std::set<KeyTuple> with_evidence;
+  for (auto it = b.begin_leafs(); it != b.end_leafs(); ++it) {
+    if (!it->hasSemantics()) continue;
+    ASSERT_EQ(it.getDepth(), b.getTreeDepth());
+    with_evidence.insert(tupleOf(it.getKey()));
+    const float* pa = a.payload(a.search(it.getKey()));
+    const float* pb = b.payload(&*it);
+    ASSERT_NE(pa, nullptr);
+    for (int c = 0; c < scene.num_classes; ++c) EXPECT_EQ(pa[c], pb[c]);
+  }
+  EXPECT_TRUE(with_evidence == ends)
+      << with_evidence.size() << " voxels with evidence, " << ends.size() << " end voxels";
+  EXPECT_GT(a.numSemanticNodes(), 2 * b.numSemanticNodes());  // free space near surfaces
+  // Second scan from elsewhere: new evidence only where occupied before or an end voxel now.
+  std::map<KeyTuple, std::vector<float>> before;
+  std::set<KeyTuple> occupied_before;
+  EvidentialOcTree expanded(b);  // pruned blocks as their voxels
+  expanded.expand();
+  for (auto it = expanded.begin_leafs(); it != expanded.end_leafs(); ++it) {
+    if (expanded.isNodeOccupied(*it)) occupied_before.insert(tupleOf(it.getKey()));
+    if (it->hasSemantics()) {
+      const float* p = expanded.payload(&*it);
+      before[tupleOf(it.getKey())].assign(p, p + scene.num_classes);
+    }
+  }
+  const SyntheticScan second = scene.scan(octomap::point3d(1.05f, 0.9f, 1.7f), 2);
+  b.insertSemanticScan(second.points_W, second.evidence, second.origin_W);
+  std::set<KeyTuple> second_ends;
+  for (size_t i = 0; i < second.points_W.size(); ++i)
+    second_ends.insert(tupleOf(b.coordToKey(second.points_W.getPoint(i))));
+  b.expand();
+  size_t changed = 0;
+  for (auto it = b.begin_leafs(); it != b.end_leafs(); ++it) {
+    if (!it->hasSemantics()) continue;
+    const KeyTuple key = tupleOf(it.getKey());
+    const float* p = b.payload(&*it);
+    const auto old = before.find(key);
+    if (old != before.end() && std::equal(p, p + scene.num_classes, old->second.begin())) continue;
+    ++changed;
+    EXPECT_TRUE(occupied_before.count(key) || second_ends.count(key));
+  }
+  EXPECT_GT(changed, 100u);
+}
+
 // --- leaf creation by the kernel --------------------------------------------------------------
 
 std::set<KeyTuple> fullDepthLeafKeys(octomap::OcTree& tree) {

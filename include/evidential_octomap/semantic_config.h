@@ -76,6 +76,11 @@ struct SemanticConfig {
   // would have crossed stay unobserved that scan (docs/benchmarks.md measures the difference).
   // An insertion setting like threads: not stored in the map.
   bool fast_free_space = false;
+  // Semantic evidence only for voxels that are occupied before the scan or hold an end point
+  // of it (a point's own voxel always gets its evidence), for live mapping (not exact): free
+  // space near surfaces gets no semantics, which cuts the kernel work about 4-fold (the support
+  // meets a surface in a disc instead of a ball). An insertion setting: not stored in the map.
+  bool semantic_occupied_only = false;
   // Threads for the semantic pass (0 = OpenMP default).
   int threads = 0;
 

@@ -54,6 +54,8 @@ void bindConfig(nb::module_& m) {
               "Let kernel updates create leaves in unknown space.")
       .def_rw("discretize", &SemanticConfig::discretize)
       .def_rw("fast_free_space", &SemanticConfig::fast_free_space)
+      .def_rw("semantic_occupied_only", &SemanticConfig::semantic_occupied_only,
+              "Semantic evidence only for occupied voxels and the scan's end voxels (live).")
       .def_rw("threads", &SemanticConfig::threads,
               "Threads of the semantic pass (0: OpenMP default).")
       .def("__repr__", [](const SemanticConfig& c) {

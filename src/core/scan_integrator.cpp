@@ -149,8 +149,12 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   const KernelPass kernel(config_, *tree);
   kernel.preparePoints(scratch.points, threads, &scratch.kernel_points);
   const bool keep = unobserved && !config_.kernel_creates_leaves;
+  using Targets = ScanSubtrees::Targets;
+  const Targets targets = config_.semantic_occupied_only          ? Targets::kOccupied
+                          : config_.kernel_creates_leaves || keep ? Targets::kEverywhere
+                                                                  : Targets::kKept;
   scratch.subtrees.build(*tree, scratch.bricks[0], scratch.points, scratch.kernel_points, kernel,
-                         threads, config_.kernel_creates_leaves || keep);
+                         threads, targets);
   timer.stop(&stats.ms_kernel, &stats.cpu_ms_kernel);
 
   // 3. One pass over the tree, subtree by subtree in parallel: each subtree's kernel rows (the

@@ -38,9 +38,9 @@ double threadCpuMs() {
 void ScanSubtrees::build(const EvidentialOcTree& tree, const VoxelBricks& rays,
                          const SemanticPoints& points,
                          const std::vector<KernelPoint>& kernel_points, const KernelPass& kernel,
-                         int threads, bool rows_everywhere) {
+                         int threads, Targets targets) {
   tree_ = &tree;
-  rows_everywhere_ = rows_everywhere;
+  targets_ = targets;
   rays_ = &rays;
   points_ = &points;
   kernel_points_ = &kernel_points;
@@ -121,6 +121,7 @@ void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, in
     }
     return;
   }
+  if (targets_ == Targets::kOccupied && !tree_->isNodeOccupied(node)) return;
   const uint64_t bits = size >= 64 ? ~uint64_t(0) : ((uint64_t(1) << size) - 1) << x;
   for (int zz = z; zz < z + size; ++zz)
     for (int yy = y; yy < y + size; ++yy) rows->mask[size_t(zz) << kSubtreeLevels | yy] |= bits;
@@ -128,15 +129,17 @@ void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, in
 
 void ScanSubtrees::buildMask(size_t i, const EvidentialOcTreeNode* existing,
                              KernelRows* rows) const {
-  rows->masked = !rows_everywhere_ && !(existing && !tree_->nodeHasChildren(existing));
+  rows->masked = targets_ == Targets::kOccupied ||
+                 (targets_ == Targets::kKept && !(existing && !tree_->nodeHasChildren(existing)));
   if (!rows->masked) return;  // every voxel may get a row (or the subtree is one pruned leaf)
   std::fill(rows->mask.begin(), rows->mask.end(), 0);
   if (existing) markLeaves(existing, 0, 0, 0, kSubtreeSize, rows);
   const octomap::OcTreeKey& base = seeds_[i].key;
-  constexpr unsigned kUpdated = 1u << kRayFree | 1u << kRayOccupied;
+  const unsigned wanted =
+      targets_ == Targets::kOccupied ? 1u << kRayOccupied : 1u << kRayFree | 1u << kRayOccupied;
   rays_->forEachSorted(ranges_[i].first_brick, ranges_[i].last_brick,
                        [&](const octomap::OcTreeKey& voxel, uint64_t, unsigned flags) {
-                         if (!(flags & kUpdated)) return;
+                         if (!(flags & wanted)) return;
                          const int x = voxel[0] - base[0], y = voxel[1] - base[1],
                                    z = voxel[2] - base[2];
                          rows->mask[size_t(z) << kSubtreeLevels | y] |= uint64_t(1) << x;

@@ -14,13 +14,16 @@ namespace evidential_octomap {
 
 class ScanSubtrees : public SubtreeSource {
  public:
+  // Which voxels get kernel rows: every voxel of the supports (the map creates leaves for
+  // them, or keeps the rows it drops), the voxels the map keeps (its leaves and this scan's
+  // ray voxels: the same map, less work), or only occupied ones (SemanticConfig::
+  // semantic_occupied_only: occupied leaves and this scan's end voxels).
+  enum class Targets { kEverywhere, kKept, kOccupied };
   // rays: sorted, with the flags of ray_casting.h. points / kernel_points: the semantic points.
-  // All must outlive the source. rows_everywhere: rows for every voxel of the supports (the
-  // map creates leaves for them, or keeps the rows it drops); else only for voxels the map has
-  // a leaf for or that a ray of this scan updates.
+  // All must outlive the source.
   void build(const EvidentialOcTree& tree, const VoxelBricks& rays, const SemanticPoints& points,
              const std::vector<KernelPoint>& kernel_points, const KernelPass& kernel, int threads,
-             bool rows_everywhere);
+             Targets targets);
   const std::vector<SubtreeSeed>& seeds() const override { return seeds_; }
   SubtreeView updates(size_t i, int thread, const EvidentialOcTreeNode* existing) override;
   // CPU time the threads spent in the kernel loop since build() [ms].
@@ -45,7 +48,7 @@ class ScanSubtrees : public SubtreeSource {
                   KernelRows* rows) const;
 
   const EvidentialOcTree* tree_ = nullptr;
-  bool rows_everywhere_ = true;
+  Targets targets_ = Targets::kEverywhere;
   const VoxelBricks* rays_ = nullptr;
   const SemanticPoints* points_ = nullptr;
   const std::vector<KernelPoint>* kernel_points_ = nullptr;

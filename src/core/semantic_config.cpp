@@ -94,6 +94,7 @@ void SemanticConfig::print(std::ostream& out) const {
       << "kernel_creates_leaves: " << (kernel_creates_leaves ? "true" : "false") << "\n"
       << "discretize: " << (discretize ? "true" : "false") << "\n"
       << "fast_free_space: " << (fast_free_space ? "true" : "false") << "\n"
+      << "semantic_occupied_only: " << (semantic_occupied_only ? "true" : "false") << "\n"
       << "threads: " << threads << "\n";
 }
 

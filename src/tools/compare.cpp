@@ -91,6 +91,11 @@ SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
 
 // Sets one SemanticConfig field by name; false when the key or value is not usable.
 bool setParameter(const std::string& key, const std::string& value, SemanticConfig* c) {
+  if (key == "semantic_occupied_only" || key == "fast_free_space") {
+    if (value != "0" && value != "1") return false;
+    (key == "fast_free_space" ? c->fast_free_space : c->semantic_occupied_only) = value == "1";
+    return true;
+  }
   if (key == "downsampling" || key == "kernel_distance") {
     (key == "downsampling" ? c->downsampling : c->kernel_distance) = value;
     return !value.empty();
@@ -129,8 +134,9 @@ SemanticConfig variantConfig(const std::string& variant, const SemanticConfig& b
     const std::string value = eq == std::string::npos ? "" : parts[i].substr(eq + 1);
     if (!setParameter(key, value, &c)) {
       throw std::invalid_argument("variant '" + variant + "': cannot set '" + parts[i] +
-                                  "' (key=value of a numeric SemanticConfig field, or "
-                                  "downsampling / kernel_distance)");
+                                  "' (key=value of a numeric SemanticConfig field, "
+                                  "downsampling / kernel_distance, or fast_free_space / "
+                                  "semantic_occupied_only = 0 or 1)");
     }
   }
   const std::string problem = c.problem();
