@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -43,6 +44,10 @@ struct FieldRef {
 };
 
 // Reads one value of `datatype` at `p` as double, honouring the message's byte order.
+// Whether a value read from the message stays finite as a float (a FLOAT64 field can hold
+// 1e300, which is finite as a double and inf, or undefined behaviour, once cast).
+bool fitsFloat(double v) { return std::fabs(v) <= std::numeric_limits<float>::max(); }
+
 double readValue(const uint8_t* p, uint8_t datatype, bool swap) {
   uint8_t b[8];
   const size_t n = typeSize(datatype);
@@ -262,7 +267,8 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
       const double x = readValue(p + xyz[0].offset, xyz[0].datatype, swap);
       const double y = readValue(p + xyz[1].offset, xyz[1].datatype, swap);
       const double z = readValue(p + xyz[2].offset, xyz[2].datatype, swap);
-      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
+      // FLOAT64 coordinates beyond float's range would become inf in the float cloud.
+      if (!fitsFloat(x) || !fitsFloat(y) || !fitsFloat(z)) {
         ++out->nonfinite_points;
         continue;
       }
@@ -270,13 +276,13 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
         for (int c = 0; c < C; ++c) {
           double value = readValue(p + channels[c].offset, channels[c].datatype, swap);
           if (input == EvidenceInput::kAlpha) value -= 1.0;
-          if (!std::isfinite(value) || value < 0.0) {
+          if (!fitsFloat(value) || value < 0.0) {
             std::ostringstream s;
             s << "point " << index << ": " << (input == EvidenceInput::kAlpha ? "alpha" : "evidence")
               << " of class " << c << " is "
               << (input == EvidenceInput::kAlpha ? value + 1.0 : value)
-              << (input == EvidenceInput::kAlpha ? " (alpha must be finite and >= 1)"
-                                                 : " (evidence must be finite and >= 0)");
+              << (input == EvidenceInput::kAlpha ? " (alpha must be finite and >= 1, within float range)"
+                                                 : " (evidence must be finite and >= 0, within float range)");
             return s.str();
           }
           row[c] = static_cast<float>(value);

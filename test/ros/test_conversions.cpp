@@ -143,6 +143,19 @@ TEST(FromPointCloud2, ReadsPerClassEvidenceFields) {
   EXPECT_FLOAT_EQ(out.evidence[1 * kC + 0], 0.f);
 }
 
+TEST(FromPointCloud2, Float64EvidenceBeyondFloatRangeIsRejectedWithThePoint) {
+  CloudSpec spec{{{"x", PointField::FLOAT32, 1}, {"y", PointField::FLOAT32, 1},
+                  {"z", PointField::FLOAT32, 1}}};
+  for (int c = 0; c < kC; ++c)
+    spec.fields.push_back({"evidence_" + std::to_string(c), PointField::FLOAT64, 1});
+  auto msg = makeCloud(spec, 2);
+  put<double>(&msg, 1, "evidence_2", 0, 1e300);
+  SemanticCloud out;
+  const std::string err = fromPointCloud2(msg, options(EvidenceInput::kEvidence), &out);
+  EXPECT_NE(err.find("point 1: evidence of class 2"), std::string::npos) << err;
+  EXPECT_NE(err.find("within float range"), std::string::npos) << err;
+}
+
 TEST(FromPointCloud2, AlphaBecomesAlphaMinusOne) {
   CloudSpec spec{{{"x", PointField::FLOAT32, 1}, {"y", PointField::FLOAT32, 1},
                   {"z", PointField::FLOAT32, 1}, {"alpha", PointField::FLOAT32, kC}}};
@@ -372,6 +385,24 @@ TEST(FromPointCloud2, NonFinitePointsAreDroppedAndCounted) {
   EXPECT_EQ(out.nonfinite_points, 1u);
   EXPECT_FLOAT_EQ(out.points_S[1].x(), 2.f);               // point 2 moved up
   EXPECT_FLOAT_EQ(out.evidence[1 * kC + 2], 5.f);          // with its own evidence
+}
+
+// Found by fuzz_pointcloud2: a FLOAT64 coordinate of 1e300 is finite as a double but not as
+// the float the cloud stores; the point came back as inf.
+TEST(FromPointCloud2, Float64CoordinatesBeyondFloatRangeAreDroppedAndCounted) {
+  CloudSpec spec{{{"x", PointField::FLOAT64, 1},
+                  {"y", PointField::FLOAT64, 1},
+                  {"z", PointField::FLOAT64, 1},
+                  {"evidence", PointField::FLOAT32, kC}}};
+  auto msg = makeCloud(spec, 3);
+  put<double>(&msg, 0, "x", 0, 1e300);
+  put<double>(&msg, 1, "z", 0, -4e38);
+  put<double>(&msg, 2, "y", 0, 3e38);  // still a float (FLT_MAX = 3.4e38)
+  SemanticCloud out;
+  ASSERT_EQ(fromPointCloud2(msg, options(), &out), "");
+  ASSERT_EQ(out.points_S.size(), 1u);
+  EXPECT_EQ(out.nonfinite_points, 2u);
+  EXPECT_FLOAT_EQ(out.points_S[0].y(), 3e38f);
 }
 
 TEST(FromPointCloud2, OrganisedCloudWithRowPadding) {
