@@ -69,7 +69,10 @@ class DempsterContribution {
   }
   // The row's log-evidence increments, into its first C doubles.
   static void finish(double* row, int num_classes) {
-    for (int c = 0; c < num_classes; ++c) row[c] += fastLog1p(row[num_classes + c]);
+    for (int c = 0; c < num_classes; ++c) {
+      const double y = row[num_classes + c];
+      if (y > 0.0) row[c] += fastLog1p(y);  // most classes of a one-hot row stay at 0
+    }
   }
 
  private:
