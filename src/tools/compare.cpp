@@ -175,29 +175,43 @@ struct ScoredRow {
   BlockScores scores;
 };
 
-// The reference rows of voxel_majority.h (no kernel, no rule): the majority of the mapped
-// points' predictions, and of their GT, in each query's voxel.
-std::vector<ScoredRow> addVoxelMajorityRows(const std::vector<Scan>& scans,
-                                            const Protocol& protocol,
-                                            const std::vector<Query>& queries,
-                                            const ClassTable& classes, double resolution,
-                                            const BootstrapReport& bootstrap, Section* sec) {
+// One reference row: metrics of the answers, a table row and its block scores.
+ScoredRow referenceRow(const std::vector<Query>& answered, const std::string& name,
+                       const ClassTable& classes, const BootstrapReport& bootstrap, Section* sec) {
+  std::vector<QueryOutcome> outcomes;
+  const QualityMetrics q =
+      evaluateInput(answered, {}, classes.numClasses(), classes.ignore_class, &outcomes);
+  sec->rows.push_back("| – | " + name + " | | |" +
+                      qualityCells(q, q.queries ? double(q.labelled) / q.queries : NAN, NAN) +
+                      " – | – | – |");
+  return {name, bootstrap.scores(outcomes)};
+}
+
+// The reference rows of voxel_majority.h (no rule): the majority of the mapped points'
+// predictions, and of their GT, in each query's voxel; and the neighbourhood oracle of the
+// predictions within the kernel's largest support.
+std::vector<ScoredRow> addReferenceRows(const std::vector<Scan>& scans, const Protocol& protocol,
+                                        const std::vector<Query>& queries,
+                                        const ClassTable& classes, double resolution,
+                                        double support, const BootstrapReport& bootstrap,
+                                        Section* sec) {
   std::vector<ScoredRow> out;
   const std::pair<MajorityOf, const char*> kinds[] = {
       {MajorityOf::kPredictions, "voxel majority of the mapped points' predictions (reference)"},
       {MajorityOf::kGroundTruth, "voxel majority of the mapped points' GT (resolution ceiling)"}};
   for (const auto& [what, name] : kinds) {
-    const std::vector<Query> answered =
-        voxelMajorityAnswers(scans, protocol.map_scans, queries, resolution, classes.numClasses(),
-                             classes.ignore_class, what);
-    std::vector<QueryOutcome> outcomes;
-    const QualityMetrics q =
-        evaluateInput(answered, {}, classes.numClasses(), classes.ignore_class, &outcomes);
-    sec->rows.push_back(std::string("| – | ") + name + " | | |" +
-                        qualityCells(q, q.queries ? double(q.labelled) / q.queries : NAN, NAN) +
-                        " – | – | – |");
-    out.push_back({name, bootstrap.scores(outcomes)});
+    out.push_back(
+        referenceRow(voxelMajorityAnswers(scans, protocol.map_scans, queries, resolution,
+                                          classes.numClasses(), classes.ignore_class, what),
+                     name, classes, bootstrap, sec));
   }
+  std::ostringstream name;
+  name << "oracle: GT when a mapped point within " << std::fixed << std::setprecision(2) << support
+       << " m predicts it (upper bound for one-hot evidence)";
+  out.push_back(
+      referenceRow(neighbourhoodOracleAnswers(scans, protocol.map_scans, queries, resolution,
+                                              support, classes.numClasses(), classes.ignore_class),
+                   name.str(), classes, bootstrap, sec));
   return out;
 }
 
@@ -277,8 +291,8 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
                      qualityCells(hard, NAN, NAN) + " – | – | – |");
   std::vector<ScoredRow> shared_rows{
       {"input predictions (hard labels)", bootstrap.scores(outcomes)}};
-  for (ScoredRow& r :
-       addVoxelMajorityRows(scans, protocol, queries, classes, o.resolution, bootstrap, &sec)) {
+  for (ScoredRow& r : addReferenceRows(scans, protocol, queries, classes, o.resolution,
+                                       o.base.maxSupportLength(), bootstrap, &sec)) {
     shared_rows.push_back(std::move(r));
   }
 

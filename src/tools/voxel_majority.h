@@ -22,4 +22,13 @@ std::vector<Query> voxelMajorityAnswers(const std::vector<Scan>& scans,
                                         const std::vector<Query>& queries, double resolution,
                                         int num_classes, int ignore_class, MajorityOf what);
 
+// An upper bound for any rule that labels a voxel with one of the classes predicted within its
+// kernel support (what one-hot evidence allows): the query's answer is its GT when some mapped
+// point predicting that class lies within `support` [m] of the query's voxel cube; otherwise the
+// most frequent prediction within the support (wrong), or no label when there is none.
+std::vector<Query> neighbourhoodOracleAnswers(const std::vector<Scan>& scans,
+                                              const std::vector<size_t>& map_scans,
+                                              const std::vector<Query>& queries, double resolution,
+                                              double support, int num_classes, int ignore_class);
+
 }  // namespace evidential_octomap::tools
