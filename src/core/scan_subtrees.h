@@ -37,6 +37,7 @@ class ScanSubtrees : public SubtreeSource {
   struct PerThread {
     KernelRows kernel;
     std::vector<std::pair<uint32_t, uint32_t>> order;  // (local Morton code, row)
+    std::vector<std::pair<uint32_t, uint32_t>> order_buffer;
     std::vector<VoxelUpdate> updates;
     double kernel_cpu_ms = 0.0;
   };
