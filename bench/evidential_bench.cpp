@@ -187,13 +187,17 @@ std::unique_ptr<Method> semanticMethod(double range, int threads, bool fast,
   return m;
 }
 
-// The live launch's settings (launch/mapping.launch): fast free space, kernel length 0.2 m.
+// The live launch's settings (launch/mapping.launch): fast free space, kernel length 0.2 m,
+// count cap ds_multiplier 2.
 std::unique_ptr<Method> liveMethod(double range, bool learned) {
   auto m = semanticMethod(range, 2, true, "dempster", learned);
-  m->label = std::string("live launch settings (fast free space, length_scale 0.2)") +
-             (learned ? ", learned (cross-fitted) evidence" : "");
+  m->label =
+      std::string("live launch settings (fast free space, length_scale 0.2, ds_multiplier 2)") +
+      (learned ? ", learned (cross-fitted) evidence" : "");
   m->key = std::string("live") + (learned ? "_learned" : "");
-  static_cast<SemanticMethod&>(*m).config.length_scale = 0.2;
+  SemanticConfig& config = static_cast<SemanticMethod&>(*m).config;
+  config.length_scale = 0.2;
+  config.ds_multiplier = 2.0;
   return m;
 }
 
