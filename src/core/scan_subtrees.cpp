@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <limits>
-#include <utility>
 
 #include "morton.h"
 #include "radix_sort.h"
@@ -26,25 +25,6 @@ octomap::OcTreeKey subtreeBase(uint64_t code) {
   return octomap::OcTreeKey(static_cast<octomap::key_type>(coarse[0] << kSubtreeLevels),
                             static_cast<octomap::key_type>(coarse[1] << kSubtreeLevels),
                             static_cast<octomap::key_type>(coarse[2] << kSubtreeLevels));
-}
-
-// (local Morton code, row) pairs by code: 3 * kSubtreeLevels = 18 bits, two 9-bit counting
-// passes (a subtree has a few thousand rows: cheaper than std::sort's n log n comparisons).
-void sortByLocalCode(std::vector<std::pair<uint32_t, uint32_t>>* items,
-                     std::vector<std::pair<uint32_t, uint32_t>>* buffer) {
-  static_assert(3 * kSubtreeLevels <= 18, "two 9-bit passes");
-  constexpr int kDigitBits = 9;
-  buffer->resize(items->size());
-  for (int shift = 0; shift < 2 * kDigitBits; shift += kDigitBits) {
-    uint32_t offsets[1 << kDigitBits] = {};
-    for (const auto& item : *items) ++offsets[(item.first >> shift) & ((1u << kDigitBits) - 1)];
-    uint32_t sum = 0;
-    for (uint32_t& offset : offsets) sum += std::exchange(offset, sum);
-    for (const auto& item : *items) {
-      (*buffer)[offsets[(item.first >> shift) & ((1u << kDigitBits) - 1)]++] = item;
-    }
-    items->swap(*buffer);
-  }
 }
 
 double threadCpuMs() {
@@ -190,7 +170,9 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
         static_cast<uint32_t>(spreadBits3(z) << 2 | spreadBits3(y) << 1 | spreadBits3(x)), row);
     kernel.index[local] = KernelRows::kNone;
   }
-  sortByLocalCode(&t.order, &t.order_buffer);
+  // 3 * kSubtreeLevels = 18 bits in two 9-bit passes: a subtree has a few thousand rows.
+  static_assert(3 * kSubtreeLevels <= 18, "two 9-bit passes");
+  radixSort<9>(&t.order, 3 * kSubtreeLevels, &t.order_buffer);
   t.kernel_cpu_ms += threadCpuMs() - start;
   // 2. Merged with the ray voxels: occupied wins over free; one update per key.
   const uint64_t subtree_code = mortonCode(base);  // its low 3 * kSubtreeLevels bits are 0
