@@ -188,16 +188,27 @@ std::unique_ptr<Method> semanticMethod(double range, int threads, bool fast,
 }
 
 // The live launch's settings (launch/mapping.launch): fast free space, kernel length 0.2 m,
-// count cap ds_multiplier 2.
+// count cap ds_multiplier 2, evidence floor 0.01.
 std::unique_ptr<Method> liveMethod(double range, bool learned) {
   auto m = semanticMethod(range, 2, true, "dempster", learned);
   m->label =
-      std::string("live launch settings (fast free space, length_scale 0.2, ds_multiplier 2)") +
+      std::string("live launch settings (fast free space, length_scale 0.2, ds_multiplier 2, "
+                  "evidence_floor 0.01)") +
       (learned ? ", learned (cross-fitted) evidence" : "");
   m->key = std::string("live") + (learned ? "_learned" : "");
   SemanticConfig& config = static_cast<SemanticMethod&>(*m).config;
   config.length_scale = 0.2;
   config.ds_multiplier = 2.0;
+  config.evidence_floor = 0.01;
+  return m;
+}
+
+// Exact occupancy with learned evidence below 0.01 counted as 0 (SemanticConfig::evidence_floor).
+std::unique_ptr<Method> flooredLearnedMethod(double range) {
+  auto m = semanticMethod(range, 2, false, "dempster", true);
+  m->label += ", evidence_floor 0.01";
+  m->key += "_floor";
+  static_cast<SemanticMethod&>(*m).config.evidence_floor = 0.01;
   return m;
 }
 
@@ -226,6 +237,7 @@ RangeRun buildRun(double range, bool quick) {
   run.methods.push_back(semanticMethod(range, 2, false, "dempster"));
   run.methods.push_back(semanticMethod(range, 2, true, "dempster"));
   run.methods.push_back(semanticMethod(range, 2, false, "dempster", true));
+  run.methods.push_back(flooredLearnedMethod(range));
   if (range > 0) {
     run.methods.push_back(liveMethod(range, false));
     run.methods.push_back(liveMethod(range, true));
@@ -573,7 +585,7 @@ void summaryLines(const std::vector<RangeRun>& runs, Report* r) {
   for (const auto& run : runs) {
     const std::string tag = rangeTag(run.range), name = rangeName(run.range);
     const Method& plain = run.get("plain");
-    std::vector<std::string> keys = {"exact", "fast", "exact_learned"};
+    std::vector<std::string> keys = {"exact", "fast", "exact_learned", "exact_learned_floor"};
     if (run.range > 0) keys.insert(keys.end(), {"live", "live_learned"});
     for (const std::string& key : keys) {
       const Method& m = run.get(key);

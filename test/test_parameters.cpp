@@ -222,6 +222,21 @@ TEST(ParameterSpace, EverySemanticConfigTheTreeAcceptsIsSavedAndLoaded) {
   EXPECT_GT(refused, 500u);
 }
 
+TEST(ParameterSpace, EvidenceFloorMustBeFiniteAndNonNegative) {
+  for (double good : {0.0, 1e-3, 0.01, 5.0, 1e300}) {
+    SemanticConfig c;
+    c.evidence_floor = good;
+    EXPECT_EQ(c.problem(), "") << good;
+    EXPECT_NO_THROW(EvidentialOcTree(0.2, 3, c)) << good;
+  }
+  for (double bad : {-1e-9, -1.0, kInf, -kInf, kNaN}) {
+    SemanticConfig c;
+    c.evidence_floor = bad;
+    EXPECT_NE(c.problem().find("evidence_floor"), std::string::npos) << bad;
+    EXPECT_THROW(EvidentialOcTree(0.2, 3, c), std::invalid_argument) << bad;
+  }
+}
+
 TEST(ParameterSpace, EveryResolutionIsSavedAndLoadedExactlyOrRefused) {
   const std::string path = tempPath("resolution.ot");
   for (double res : {1e-7, 1e-6, 0.05, 0.123456789, 1.0 / 3.0, 1e6, 2e6}) {

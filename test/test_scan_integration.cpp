@@ -438,6 +438,34 @@ TEST(ScanIntegration, RowsOnlyForKeptVoxelsGiveTheSameMapBitForBit) {
   EXPECT_TRUE(compareTrees(masked, everywhere));
 }
 
+// evidence_floor: the map equals the map of the same scan whose values below the floor were
+// set to 0 before insertion, and differs from the map without the floor (the synthetic scene
+// gives every class U(0, 0.6) of noise evidence, so a floor of 0.3 drops about half of them).
+TEST(ScanIntegration, EvidenceFloorEqualsZeroingTheSmallValuesBeforeInsertion) {
+  SyntheticScene scene;
+  const SyntheticScan scan = scene.defaultScan();
+  const float floor = 0.3f;
+  std::vector<float> zeroed = scan.evidence;
+  size_t dropped = 0;
+  for (float& e : zeroed) {
+    if (e < floor) {
+      dropped += e > 0.0f;
+      e = 0.0f;
+    }
+  }
+  ASSERT_GT(dropped, scan.evidence.size() / 4);
+  SemanticConfig with_floor, without;
+  with_floor.threads = without.threads = 1;
+  with_floor.evidence_floor = floor;
+  EvidentialOcTree floored(0.2, scene.num_classes, with_floor),
+      zeroed_first(0.2, scene.num_classes, without), plain(0.2, scene.num_classes, without);
+  floored.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  zeroed_first.insertSemanticScan(scan.points_W, zeroed, scan.origin_W);
+  plain.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  EXPECT_TRUE(compareTrees(floored, zeroed_first));
+  EXPECT_FALSE(compareTrees(floored, plain));
+}
+
 // semantic_occupied_only: into an empty map, exactly the end voxels get evidence, each the same
 // evidence as in the default map (a voxel's rows do not depend on which other voxels get rows);
 // a second scan adds evidence only to voxels occupied before it or holding its end points.

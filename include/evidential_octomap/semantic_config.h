@@ -81,6 +81,14 @@ struct SemanticConfig {
   // space near surfaces gets no semantics, which cuts the kernel work about 4-fold (the support
   // meets a surface in a disc instead of a ball). An insertion setting: not stored in the map.
   bool semantic_occupied_only = false;
+  // Point evidence below this value counts as 0 (0: off). An evidential network's softplus or
+  // exp head gives every class some evidence: the bundled learned model gives 20 non-zero values
+  // per point, of which 1.16 on average are >= 0.01. A contribution's log-evidence is below
+  // evidence_floor / C for such a class and its uncertainty u = C / S moves by at most
+  // C * evidence_floor / S, while each value kept costs work in the kernel and memory in the
+  // map. 0.01 (1 % of one class's prior weight) makes learned evidence as cheap as one-hot
+  // (docs/benchmarks.md measures cost and map quality). An insertion setting: not stored.
+  double evidence_floor = 0.0;
   // Threads for the semantic pass (0 = OpenMP default).
   int threads = 0;
 

@@ -56,6 +56,8 @@ void bindConfig(nb::module_& m) {
       .def_rw("fast_free_space", &SemanticConfig::fast_free_space)
       .def_rw("semantic_occupied_only", &SemanticConfig::semantic_occupied_only,
               "Semantic evidence only for occupied voxels and the scan's end voxels (live).")
+      .def_rw("evidence_floor", &SemanticConfig::evidence_floor,
+              "Point evidence below this counts as 0 (0: off; an insertion setting).")
       .def_rw("threads", &SemanticConfig::threads,
               "Threads of the semantic pass (0: OpenMP default).")
       .def("__repr__", [](const SemanticConfig& c) {

@@ -41,6 +41,8 @@ std::string SemanticConfig::problem() const {
     return outOfRange("sbki_prior", sbki_prior, "finite and > 0");
   if (!(std::isfinite(evidence_cap) && evidence_cap >= 0.0))
     return outOfRange("evidence_cap", evidence_cap, "finite and >= 0 (0: no cap)");
+  if (!(std::isfinite(evidence_floor) && evidence_floor >= 0.0))
+    return outOfRange("evidence_floor", evidence_floor, "finite and >= 0 (0: off)");
   if (downsampling != "average" && downsampling != "count_cap")
     return "downsampling '" + downsampling + "' is unknown; use average or count_cap";
   if (kernel_distance != "voxel" && kernel_distance != "centre")
@@ -95,6 +97,7 @@ void SemanticConfig::print(std::ostream& out) const {
       << "discretize: " << (discretize ? "true" : "false") << "\n"
       << "fast_free_space: " << (fast_free_space ? "true" : "false") << "\n"
       << "semantic_occupied_only: " << (semantic_occupied_only ? "true" : "false") << "\n"
+      << "evidence_floor: " << evidence_floor << "\n"
       << "threads: " << threads << "\n";
 }
 

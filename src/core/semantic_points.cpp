@@ -123,6 +123,10 @@ void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticC
     for (int k = 0; k < num_classes; ++k)
       out->evidence[o * num_classes + k] = float(sums[k] / count);
   }
+  if (config.evidence_floor > 0.0) {
+    const float floor = static_cast<float>(config.evidence_floor);
+    for (float& e : out->evidence) e = e < floor ? 0.0f : e;
+  }
 }
 
 }  // namespace evidential_octomap

@@ -38,7 +38,8 @@ struct SemanticScratch {
 // Drops the points above the scan's percentile U_thr of their uncertainty (over the points
 // before any down-sampling, as the authors do), then down-samples what is left; `stats` gets
 // U_thr and the number of points dropped. The result is in the order of the down-sampling
-// cells' keys; the evidence of a cell sums in the input order.
+// cells' keys; the evidence of a cell sums in the input order. Evidence below
+// config.evidence_floor is then set to 0.
 void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticConfig& config,
                           bool use_threshold, double resolution, int threads,
                           SemanticScratch* scratch, SemanticPoints* out, InsertStats* stats);

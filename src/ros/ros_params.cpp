@@ -103,6 +103,7 @@ void readSemanticConfig(const ros::NodeHandle& nh, double resolution, SemanticCo
   nh.param("threads", c.threads, c.threads);
   nh.param("fast_free_space", c.fast_free_space, c.fast_free_space);
   nh.param("semantic_occupied_only", c.semantic_occupied_only, c.semantic_occupied_only);
+  nh.param("evidence_floor", c.evidence_floor, c.evidence_floor);
   std::string problem = c.problem();
   if (problem.empty()) problem = c.supportProblem(resolution);
   if (!problem.empty()) throw std::invalid_argument("~parameters refused: " + problem);

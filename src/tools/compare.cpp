@@ -106,7 +106,8 @@ bool setParameter(const std::string& key, const std::string& value, SemanticConf
                                                     {"gamma", &c->gamma},
                                                     {"drop_percent", &c->drop_percent},
                                                     {"evidence_cap", &c->evidence_cap},
-                                                    {"ds_multiplier", &c->ds_multiplier}};
+                                                    {"ds_multiplier", &c->ds_multiplier},
+                                                    {"evidence_floor", &c->evidence_floor}};
   for (const auto& [name, field] : fields) {
     if (key != name) continue;
     try {
