@@ -9,6 +9,7 @@
 #include <octomap/OcTreeNode.h>
 #include <octomap/OccupancyOcTreeBase.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <iosfwd>
 #include <memory>
@@ -33,6 +34,12 @@ class EvidentialOcTreeNode : public octomap::OcTreeNode {
   static constexpr uint32_t kNoPayload = 0xFFFFFFFFu;
 
   bool hasSemantics() const { return payload_ != kNoPayload; }
+
+  // Nodes live in 16-byte cells of a pool (node_allocator.h), not in malloc's 32-byte chunks:
+  // a third of a map's nodes-and-pointers memory. Every node of the tree is made by `new` and
+  // freed by `delete` on this type (OctoMap and this library alike), so both come here.
+  static void* operator new(size_t size);
+  static void operator delete(void* node, size_t size);
 
   // Occupancy and payload slot are compared; the tree compares payload contents.
   bool operator==(const EvidentialOcTreeNode& rhs) const {

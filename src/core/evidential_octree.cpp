@@ -12,12 +12,30 @@
 
 #include "evidential_octomap/safe_key.h"
 #include "evidential_octomap/scan_integrator.h"
+#include "node_allocator.h"
 #include "payload_pool.h"
 #include "tree_edit.h"
 
 namespace evidential_octomap {
 
 // --- node ----------------------------------------------------------------------------------------
+
+static_assert(sizeof(EvidentialOcTreeNode) == NodeAllocator::kCellBytes,
+              "a node fills one allocator cell");
+
+void* EvidentialOcTreeNode::operator new(size_t size) {
+  // A derived node type (none in this library) would be larger: malloc serves it.
+  return size == NodeAllocator::kCellBytes ? NodeAllocator::allocate() : ::operator new(size);
+}
+
+void EvidentialOcTreeNode::operator delete(void* node, size_t size) {
+  if (!node) return;
+  if (size == NodeAllocator::kCellBytes) {
+    NodeAllocator::deallocate(node);
+  } else {
+    ::operator delete(node);
+  }
+}
 
 EvidentialOcTreeNode* EvidentialOcTreeNode::addChild(unsigned i) {
   if (!children) {
