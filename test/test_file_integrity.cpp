@@ -142,6 +142,47 @@ std::vector<float> reencodeNode(const std::string& in, size_t* at, int num_class
   return payload;
 }
 
+// One format-5 node record and its subtree as format 4 wrote them (an independent decoder of
+// the log-odds coding): the log-odds as f32 instead of a `width`-byte index into `table`.
+void decodeLogOdds(const std::string& in, size_t* at, int width, const std::vector<float>& table,
+                   int num_classes, std::string* out) {
+  uint32_t index = 0;
+  std::memcpy(&index, &in[*at], width);  // little-endian
+  *at += width;
+  const float value = table.at(index);
+  out->append(reinterpret_cast<const char*>(&value), 4);
+  const uint8_t children = static_cast<uint8_t>(in[*at]);
+  size_t record = 1;  // child mask
+  if (children == 0) {
+    const uint8_t tag = static_cast<uint8_t>(in[*at + 1]);
+    record += 1 + (tag == 1 ? 4 * num_classes : tag >= 2 ? 5 * (tag - 2) : 0);
+  }
+  out->append(in, *at, record);
+  *at += record;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (children & (1u << i)) decodeLogOdds(in, at, width, table, num_classes, out);
+  }
+}
+
+// The same map as format 4 wrote it, from a format-5 file whose log-odds are coded by a table.
+std::string toFormat4(const std::string& bytes, const EvidentialOcTree& tree) {
+  const size_t s = sectionStart(bytes);
+  const size_t coding = rootOffset(bytes, tree.size());
+  const int width = static_cast<uint8_t>(bytes[coding]);
+  EXPECT_LT(width, 4) << "a small map codes its log-odds by a table";
+  const uint32_t size = u32At(bytes, coding + 1);
+  std::vector<float> table(size);
+  std::memcpy(table.data(), &bytes[coding + 5], 4 * size);
+  size_t at = coding + 5 + 4 * size;
+  std::string nodes;
+  decodeLogOdds(bytes, &at, width, table, tree.numClasses(), &nodes);
+  std::string old = bytes.substr(0, coding) + nodes + bytes.substr(at);
+  const uint32_t four = 4;
+  std::memcpy(&old[s + kVersionOffset], &four, 4);
+  reseal(&old);
+  return old;
+}
+
 // The same map as format 2 wrote it (inner payloads, dense payloads, no evidence cap: the f64
 // before the node count), from a format-4 file.
 std::string toFormat2(const std::string& bytes, const EvidentialOcTree& tree) {
@@ -229,7 +270,7 @@ TEST(Integrity, NoAlteredFileLoadsAsADifferentMap) {
   RecordProperty("same", std::to_string(same));
 }
 
-TEST(Integrity, Format1And2FilesStillLoad) {
+TEST(Integrity, Format1To4FilesStillLoad) {
   Scratch scratch;
   for (const std::string rule : {"dempster", "ebs"}) {
     SemanticConfig config;
@@ -245,8 +286,16 @@ TEST(Integrity, Format1And2FilesStillLoad) {
     std::ostringstream out;
     out << std::setprecision(17);
     tree->write(out);
-    const std::string v2 = toFormat2(out.str(), *tree);
-    ASSERT_GT(v2.size(), out.str().size()) << "format 2 stores inner payloads";
+    const std::string v4 = toFormat4(out.str(), *tree), v2 = toFormat2(v4, *tree);
+    ASSERT_GT(v4.size(), out.str().size()) << "format 4 stores f32 log-odds";
+    ASSERT_GT(v2.size(), v4.size()) << "format 2 stores inner payloads";
+    {
+      const std::string path = scratch.file("format4.ot");
+      writeBytes(path, v4);
+      std::unique_ptr<EvidentialOcTree> loaded;
+      ASSERT_NO_THROW(loaded = loadMap(path)) << rule;
+      EXPECT_TRUE(compareTrees(*tree, *loaded)) << rule << ", format 4";
+    }
     // Formats before 4 predate the evidence cap: their maps are read without one.
     config.evidence_cap = 0.0;
     tree->setConfig(config);
@@ -272,10 +321,10 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   std::ostringstream out;
   out << std::setprecision(17);
   tree->write(out);
-  const std::string v3 = out.str(), v2 = toFormat2(v3, *tree);
-  const size_t root = rootOffset(v3, tree->size());
+  const std::string v5 = out.str(), v4 = toFormat4(v5, *tree), v2 = toFormat2(v4, *tree);
+  const size_t root = rootOffset(v4, tree->size());
   float root_value;
-  std::memcpy(&root_value, &v3[root], 4);
+  std::memcpy(&root_value, &v4[root], 4);
   ASSERT_EQ(root_value, tree->getRoot()->getValue()) << "root offset not found";
   auto refused = [&](const std::string& file, const std::string& what) {
     const std::string path = scratch.file("inner.ot");
@@ -288,7 +337,7 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
     }
   };
   const float other = root_value + 0.5f;
-  for (std::string edited : {v3, v2}) {
+  for (std::string edited : {v4, v2}) {
     std::memcpy(&edited[root], &other, 4);
     reseal(&edited);
     refused(edited, "log-odds");
@@ -303,6 +352,53 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   reseal(&edited);
   refused(edited, "evidence, format 2");
   refused(toFormat1(edited), "evidence, format 1");
+  // Format 5: the root's log-odds index pointing at another value of the table.
+  const size_t coding = rootOffset(v5, tree->size());
+  ASSERT_EQ(v5[coding], 1) << "one byte per log-odds";
+  const uint32_t size = u32At(v5, coding + 1);
+  ASSERT_GE(size, 2u);
+  std::string edited5 = v5;
+  const size_t root5 = coding + 5 + 4 * size;
+  edited5[root5] = static_cast<char>((static_cast<uint8_t>(edited5[root5]) + 1) % size);
+  reseal(&edited5);
+  refused(edited5, "log-odds index, format 5");
+}
+
+// Format 5's log-odds coding, altered and resealed: refused with what is wrong.
+TEST(Integrity, BadLogOddsCodingIsRefused) {
+  Scratch scratch;
+  const auto tree = smallMap();
+  std::ostringstream out;
+  out << std::setprecision(17);
+  tree->write(out);
+  const std::string v5 = out.str();
+  const size_t coding = rootOffset(v5, tree->size());
+  const uint32_t size = u32At(v5, coding + 1);
+  ASSERT_GE(size, 2u);
+  const auto refusedWith = [&](std::string file, const std::string& message) {
+    reseal(&file);
+    const std::string path = scratch.file("coding.ot");
+    writeBytes(path, file);
+    try {
+      loadMap(path);
+      ADD_FAILURE() << message << ": loaded";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  std::string edited = v5;
+  edited[coding] = 3;
+  refusedWith(edited, "bad log-odds width");
+  edited = v5;
+  edited[coding + 5 + 4 * size] = static_cast<char>(size);  // the root's index
+  refusedWith(edited, "outside the table");
+  edited = v5;
+  std::memcpy(&edited[coding + 5], &edited[coding + 9], 4);  // first value == second
+  refusedWith(edited, "not finite and increasing");
+  edited = v5;
+  const uint32_t too_long = 257;
+  std::memcpy(&edited[coding + 1], &too_long, 4);
+  refusedWith(edited, "too long");
 }
 
 // A mutated file whose CRC was resealed loaded with clamps 0.5 + 1e-43 .. 0.5 + 2e-38 (log-odds

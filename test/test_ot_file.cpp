@@ -65,6 +65,12 @@ class TempDir {
   std::string path_;
 };
 
+uint32_t bitsOf(float value) {
+  uint32_t bits;
+  std::memcpy(&bits, &value, sizeof bits);
+  return bits;
+}
+
 std::string readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
@@ -197,38 +203,76 @@ TEST(OtFile, ManyClassesAndOddNamesRoundTrip) {
 // Format 3 stores a payload for leaves only, each in the shorter of its two forms. The size of
 // the node records is recomputed here from the tree: 4 B log-odds + 1 B child mask per node,
 // and per leaf a tag byte plus min(4 C dense, 5 B per class whose bits differ from the prior).
-TEST(OtFile, Format3StoresLeafPayloadsOnlyInTheShorterForm) {
+// Format 5: a node's log-odds as a 1-byte index into the table of the map's distinct values
+// (2 bytes beyond 256 values), its child mask, and a leaf's payload in the shorter of the dense
+// and the sparse form; inner nodes carry no payload.
+TEST(OtFile, Format5CodesLogOddsByTableAndStoresLeafPayloadsInTheShorterForm) {
   for (const std::string& rule : kFusionRuleNames) {
     const auto tree = makeMap(rule);
     const int c = tree->numClasses();
     const float prior = tree->rule().prior();
-    size_t expected = 0, inner_with_semantics = 0;
+    size_t nodes = 0, payload_bytes = 0, inner_with_semantics = 0;
+    std::set<uint32_t> distinct;
     for (auto it = tree->begin_tree(); it != tree->end_tree(); ++it) {
-      expected += 5;
+      ++nodes;
+      distinct.insert(bitsOf(it->getValue()));
       if (!it.isLeaf()) {
         inner_with_semantics += it->hasSemantics() ? 1 : 0;
         continue;
       }
-      expected += 1;
+      payload_bytes += 1;
       if (const float* p = tree->payload(&*it)) {
         size_t differing = 0;
         for (int k = 0; k < c; ++k) differing += test::sameBits(p[k], prior) ? 0 : 1;
         const size_t sparse = 5 * differing;
-        expected += sparse < 4u * c ? sparse : 4u * c;
+        payload_bytes += sparse < 4u * c ? sparse : 4u * c;
       }
     }
     ASSERT_GT(inner_with_semantics, 10u) << rule;
+    ASSERT_LE(distinct.size(), 256u) << rule;
+    const size_t expected = nodes * (1 + 1) + 4 * distinct.size() + payload_bytes;
     std::ostringstream full, empty;
     tree->writeData(full);
     EvidentialOcTree blank(tree->getResolution(), c, tree->config());
     blank.setClassNames(tree->classNames());
-    blank.writeData(empty);
+    blank.writeData(empty);  // an empty table
     EXPECT_EQ(full.str().size() - empty.str().size(), expected) << rule;
   }
 }
 
-// Files written before format 3 (inner nodes carried a copy of a child's payload) still load:
-// the fixtures were written by the format-1 library, which also dumped every leaf it read back.
+// Beyond 256 distinct log-odds the index takes 2 bytes, beyond 65536 the value itself (f32);
+// each map reads back bit for bit.
+TEST(OtFile, LogOddsIndexWidthFollowsTheNumberOfDistinctValues) {
+  EvidentialOcTree blank(0.1, 2);
+  std::ostringstream empty;
+  blank.writeData(empty);  // width 1, an empty table
+  for (const uint32_t leaves : {200u, 5000u, 70000u}) {
+    EvidentialOcTree tree(0.1, 2);
+    for (uint32_t i = 0; i < leaves; ++i) {  // a distinct value per leaf
+      const octomap::OcTreeKey key(static_cast<octomap::key_type>(32768 + i % 256),
+                                   static_cast<octomap::key_type>(32768 + i / 256), 32768);
+      tree.setNodeValue(key, -2.0f + 4.0f * float(i) / float(leaves));
+    }
+    std::stringstream data;
+    tree.writeData(data);
+    EvidentialOcTree loaded(0.1, 2);
+    ASSERT_TRUE(loaded.readData(data)) << leaves;
+    EXPECT_TRUE(compareTrees(tree, loaded)) << leaves;
+    std::set<uint32_t> distinct;
+    size_t inner = 0;
+    for (auto it = tree.begin_tree(); it != tree.end_tree(); ++it) {
+      distinct.insert(bitsOf(it->getValue()));
+      inner += it.isLeaf() ? 0 : 1;
+    }
+    const size_t width = distinct.size() <= 256 ? 1 : distinct.size() <= 65536 ? 2 : 4;
+    // Nodes: log-odds and child mask, leaves a payload tag; the table 4 B a value (and the
+    // empty map's u32 table length, which width 4 leaves out).
+    const size_t coded = tree.size() * (width + 1) + (tree.size() - inner) +
+                         (width < 4 ? 4 * distinct.size() : 0);
+    EXPECT_EQ(data.str().size() + (width < 4 ? 0 : 4) - empty.str().size(), coded) << leaves;
+  }
+}
+
 TEST(OtFile, Format1FilesOfTheOldLibraryStillLoadLeafForLeaf) {
   for (const std::string rule : {"dempster", "sbki"}) {
     const std::string fixtures = std::string(EVIDENTIAL_OCTOMAP_SOURCE_DIR) + "/test/fixtures/";

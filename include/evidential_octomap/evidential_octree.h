@@ -28,6 +28,8 @@ class ScanIntegrator;
 class SubtreeSource;
 struct SubtreeSeed;
 struct DroppedRows;
+class LogOddsTable;
+struct NodeCoding;
 
 class EvidentialOcTreeNode : public octomap::OcTreeNode {
  public:
@@ -269,11 +271,13 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   class SectionReader;
   void writeHeader(SectionWriter& out) const;
   void readHeader(SectionReader& in, uint32_t version);
-  bool writeNodes(const EvidentialOcTreeNode* root_node, SectionWriter& out) const;
+  bool writeNodes(const EvidentialOcTreeNode* root_node, const LogOddsTable& table,
+                  SectionWriter& out) const;
   void writePayload(const EvidentialOcTreeNode* leaf, float prior, SectionWriter& out) const;
-  void readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, uint32_t version,
+  void readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, const NodeCoding& coding,
                        SectionReader& in, Edit& edit);
   void readPayload(EvidentialOcTreeNode* leaf, uint8_t tag, SectionReader& in, Edit& edit);
+  static NodeCoding readNodeCoding(SectionReader& in, uint32_t version);
 
   int num_classes_ = 1;
   std::vector<std::string> class_names_;

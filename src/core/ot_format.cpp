@@ -1,14 +1,18 @@
 // The data section of an EvidentialOcTree .ot file (what AbstractOcTree::write puts after OctoMap's
-// text header "id / size / res / data"). Little-endian, format 4:
+// text header "id / size / res / data"). Little-endian, format 5:
 //
 //   u32 magic "EVEM", u32 format, f64 resolution (2+), u32 C, C x string class name,
 //   string rule, string downsampling (2+), string kernel_distance (2+), 7 x f64 (length_scale
 //   sigma0 beta gamma drop_percent ds_multiplier max_range), 5 x u8 flags, f32 sbki_prior,
 //   5 x f32 occupancy log-odds (clamp min, clamp max, hit, miss, threshold), f64 evidence_cap
 //   (4+; older maps are read without a cap, as they were written), u64 node count,
-//   nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of every byte from the magic to
-//   the end magic.
-//   node (3+): f32 log-odds, u8 child mask, and for a leaf a u8 payload tag:
+//   log-odds coding (5+), nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of every
+//   byte from the magic to the end magic.
+//   log-odds coding (5+): u8 width W (1, 2 or 4); for W < 4 u32 T (<= 256 for W = 1,
+//             <= 65536 for W = 2) and T x f32: the map's distinct log-odds, increasing (-0 before
+//             +0), and a node's log-odds is then its W-byte index in this table (log_odds_table.h)
+//   node (3+): log-odds (f32 up to format 4; 5+: W bytes), u8 child mask, and for a leaf a u8
+//             payload tag:
 //             0 no payload; 1 C x f32; 2 + n: n x (u8 class, f32 value), the classes whose value
 //             differs (in its bits) from the rule's prior, in increasing order. The writer takes
 //             the shorter form. Inner nodes store no payload: their summary (the richest
@@ -16,7 +20,7 @@
 //   node (1, 2): f32 log-odds, u8 child mask, u8 has-payload, [C x f32 payload], inner nodes too
 //   string: u32 length (<= 4096), bytes
 //
-// Format 1 (before the CRC) has no resolution field and no CRC; formats 1 to 3 are still read.
+// Format 1 (before the CRC) has no resolution field and no CRC; formats 1 to 4 are still read.
 // OctoMap's own header prints `res` with the stream's precision (6 digits unless the writer sets
 // more), so formats 2+ keep the exact resolution in the section and the reader restores it.
 #include <algorithm>
@@ -28,6 +32,7 @@
 #include <vector>
 
 #include "crc32.h"
+#include "log_odds_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "payload_pool.h"
 #include "tree_edit.h"
@@ -40,13 +45,29 @@ constexpr uint32_t kFileEndMagic = 0x444E4545u;
 constexpr uint32_t kFormatWithoutCrc = 1;
 constexpr uint32_t kFormatWithInnerPayloads = 2;
 constexpr uint32_t kFormatSparseNodes = 3;  // no inner payloads, sparse leaf payloads
-constexpr uint32_t kFormat = 4;
+constexpr uint32_t kFormatEvidenceCap = 4;
+constexpr uint32_t kFormat = 5;  // log-odds coded by a table
 constexpr uint32_t kMaxNameLength = 4096;
 constexpr uint8_t kNoPayloadTag = 0;
 constexpr uint8_t kDenseTag = 1;
 constexpr uint8_t kSparseTag = 2;  // + number of (class, value) pairs
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
+
+// Every node's log-odds, depth first.
+template <class Visit>
+void forEachNode(const EvidentialOcTree& tree, const EvidentialOcTreeNode* root, Visit visit) {
+  std::vector<const EvidentialOcTreeNode*> stack{root};
+  while (!stack.empty()) {
+    const EvidentialOcTreeNode* node = stack.back();
+    stack.pop_back();
+    visit(node);
+    if (!tree.nodeHasChildren(node)) continue;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (tree.nodeChildExists(node, i)) stack.push_back(tree.getNodeChild(node, i));
+    }
+  }
+}
 
 // Thrown inside readData only; turned into read_error_ there.
 struct FormatError : std::runtime_error {
@@ -148,6 +169,13 @@ std::string EvidentialOcTree::innerNodeProblem(const EvidentialOcTreeNode* node)
   return "";
 }
 
+// How a file codes its nodes: its format and (5+) the log-odds table.
+struct NodeCoding {
+  uint32_t version = 0;
+  int width = 4;             // bytes of a node's log-odds: 1 or 2 (index into `table`) or 4 (f32)
+  std::vector<float> table;  // increasing (LogOddsTable::before)
+};
+
 // --- writing ---------------------------------------------------------------------------------
 
 std::ostream& EvidentialOcTree::writeData(std::ostream& s) const {
@@ -161,7 +189,15 @@ std::ostream& EvidentialOcTree::writeData(std::ostream& s) const {
   SectionWriter out(s);
   writeHeader(out);
   out.pod(static_cast<uint64_t>(tree_size));
-  if (root && !writeNodes(root, out)) {
+  LogOddsTable table;
+  if (root) forEachNode(*this, root, [&](const EvidentialOcTreeNode* n) { table.add(n->getValue()); });
+  table.finish();
+  out.pod(static_cast<uint8_t>(table.width()));
+  if (table.width() < 4) {
+    out.pod(static_cast<uint32_t>(table.values().size()));
+    for (float v : table.values()) out.pod(v);
+  }
+  if (root && !writeNodes(root, table, out)) {
     out.flush();
     OCTOMAP_ERROR_STR(
         "EvidentialOcTree: not written: inner nodes are stale (call "
@@ -202,7 +238,8 @@ void EvidentialOcTree::writeHeader(SectionWriter& out) const {
 
 // Depth first, child 0 first. Returns false (and stops) at the first inner node whose occupancy
 // disagrees with its children: the reader would refuse the file.
-bool EvidentialOcTree::writeNodes(const EvidentialOcTreeNode* root_node, SectionWriter& out) const {
+bool EvidentialOcTree::writeNodes(const EvidentialOcTreeNode* root_node, const LogOddsTable& table,
+                                  SectionWriter& out) const {
   const float prior = rule_->prior();
   std::vector<const EvidentialOcTreeNode*> stack{root_node};
   while (!stack.empty()) {
@@ -213,7 +250,11 @@ bool EvidentialOcTree::writeNodes(const EvidentialOcTreeNode* root_node, Section
       if (nodeChildExists(node, i)) children |= static_cast<uint8_t>(1u << i);
     }
     if (children != 0 && !innerNodeProblem(node).empty()) return false;
-    out.pod(node->getValue());
+    switch (table.width()) {
+      case 1: out.pod(static_cast<uint8_t>(table.code(node->getValue()))); break;
+      case 2: out.pod(static_cast<uint16_t>(table.code(node->getValue()))); break;
+      default: out.pod(node->getValue());
+    }
     out.pod(children);
     if (children == 0) writePayload(node, prior, out);
     for (int i = 7; i >= 0; --i) {
@@ -257,16 +298,17 @@ std::istream& EvidentialOcTree::readData(std::istream& s) {
     const uint32_t version = in.pod<uint32_t>("semantic header");
     if (version < kFormatWithoutCrc || version > kFormat) {
       throw FormatError("unsupported EvidentialOcTree file format " + std::to_string(version) +
-                        " (this library reads formats 1 to 4)");
+                        " (this library reads formats 1 to 5)");
     }
     readHeader(in, version);
     const uint64_t expected_nodes = in.pod<uint64_t>("node count");
+    const NodeCoding coding = readNodeCoding(in, version);
     if (expected_nodes > 0) {
       root = new EvidentialOcTreeNode();
       tree_size = 1;
       Edit edit(pool_.get(), 1024);
       try {
-        readNodesRecurs(root, 0, version, in, edit);
+        readNodesRecurs(root, 0, coding, in, edit);
       } catch (...) {
         commit(edit);
         throw;
@@ -332,7 +374,7 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
   config.sbki_prior = in.pod<float>("parameters");
   float occupancy[5];
   for (float& v : occupancy) v = in.pod<float>("occupancy parameters");
-  config.evidence_cap = version > kFormatSparseNodes ? in.pod<double>("evidence cap") : 0.0;
+  config.evidence_cap = version >= kFormatEvidenceCap ? in.pod<double>("evidence cap") : 0.0;
   const std::string problem = storedParameterProblem(resolution, occupancy, config);
   if (!problem.empty()) throw FormatError("bad parameters: " + problem);
   setConfig(config);
@@ -344,9 +386,43 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
   occ_prob_thres_log = occupancy[4];
 }
 
-void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth, uint32_t version,
-                                       SectionReader& in, Edit& edit) {
-  const float value = in.pod<float>("node data");
+NodeCoding EvidentialOcTree::readNodeCoding(SectionReader& in, uint32_t version) {
+  NodeCoding coding;
+  coding.version = version;
+  if (version < kFormat) return coding;  // f32 log-odds
+  coding.width = in.pod<uint8_t>("log-odds coding");
+  if (coding.width != 1 && coding.width != 2 && coding.width != 4) {
+    throw FormatError("bad log-odds width " + std::to_string(coding.width));
+  }
+  if (coding.width == 4) return coding;
+  const uint32_t size = in.pod<uint32_t>("log-odds table");
+  if (size > (coding.width == 1 ? 256u : LogOddsTable::kMaxValues)) {
+    throw FormatError("log-odds table too long for its width");
+  }
+  coding.table.resize(size);
+  in.bytes(coding.table.data(), sizeof(float) * size, "log-odds table");
+  for (uint32_t i = 0; i < size; ++i) {
+    if (!std::isfinite(coding.table[i]) ||
+        (i > 0 && !LogOddsTable::before(coding.table[i - 1], coding.table[i]))) {
+      throw FormatError("log-odds table not finite and increasing (corrupt)");
+    }
+  }
+  return coding;
+}
+
+void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned depth,
+                                       const NodeCoding& coding, SectionReader& in, Edit& edit) {
+  float value;
+  if (coding.width == 4) {
+    value = in.pod<float>("node data");
+  } else {
+    const uint32_t index =
+        coding.width == 1 ? in.pod<uint8_t>("node data") : in.pod<uint16_t>("node data");
+    if (index >= coding.table.size()) {
+      throw FormatError("a node's log-odds index is outside the table (corrupt node data)");
+    }
+    value = coding.table[index];
+  }
   const uint8_t children = in.pod<uint8_t>("node data");
   if (!std::isfinite(value)) throw FormatError("a node's log-odds are not finite");
   if (depth == tree_depth && children != 0) {
@@ -354,7 +430,7 @@ void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned dept
   }
   node->setValue(value);
   std::vector<float> summary;  // formats 1 and 2: the stored summary of an inner node
-  if (version < kFormatSparseNodes) {
+  if (coding.version < kFormatSparseNodes) {
     const uint8_t has_payload = in.pod<uint8_t>("node data");
     if (has_payload > 1) throw FormatError("bad payload flag (corrupt node data)");
     if (has_payload && children != 0) {
@@ -368,14 +444,14 @@ void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned dept
   }
   for (unsigned i = 0; i < 8; ++i) {
     if (children & (1u << i)) {
-      readNodesRecurs(createChild(node, i, edit), depth + 1, version, in, edit);
+      readNodesRecurs(createChild(node, i, edit), depth + 1, coding, in, edit);
     }
   }
   if (children == 0) return;
   const std::string problem = innerNodeProblem(node);
   if (!problem.empty()) throw FormatError(problem + " (corrupt node data)");
   linkSummary(node);
-  if (version < kFormatSparseNodes) {  // the stored summary must be the one derived from the children
+  if (coding.version < kFormatSparseNodes) {  // the stored summary must be the one derived from the children
     const float* derived = payload(node);
     if ((derived == nullptr) != summary.empty() ||
         (derived && !std::equal(summary.begin(), summary.end(), derived, sameBits))) {
