@@ -387,6 +387,33 @@ TEST(ScanIntegration, IntegratorEqualsTreeInsertion) {
   EXPECT_EQ(sa.semantic_points, sb.semantic_points);
 }
 
+// The integrator keeps its scratch buffers from scan to scan, but not what one dense scan grew
+// them to once sparse scans follow; and what it keeps never changes the map: the same scans
+// through a fresh integrator each give the same map, bit for bit.
+TEST(ScanIntegration, KeptScratchIsBoundedAndNeverChangesTheMap) {
+  SyntheticScene dense, sparse;
+  dense.azimuth_step_deg = dense.elevation_step_deg = 0.15;
+  sparse.azimuth_step_deg = sparse.elevation_step_deg = 2.0;
+  const SyntheticScan scans[] = {dense.defaultScan(1), sparse.defaultScan(2), dense.defaultScan(3),
+                                 sparse.defaultScan(4)};
+  SemanticConfig config;
+  config.threads = 2;
+  EvidentialOcTree kept(0.2, dense.num_classes, config), fresh(0.2, dense.num_classes, config);
+  EXPECT_EQ(kept.scratchBytes(), 0u);
+  std::vector<size_t> bytes;
+  for (const SyntheticScan& scan : scans) {
+    kept.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+    ScanIntegrator(config).integrate(scan.points_W, scan.evidence, scan.origin_W, &fresh);
+    bytes.push_back(kept.scratchBytes());
+  }
+  ASSERT_GT(scans[0].points_W.size(), 40 * scans[1].points_W.size());
+  EXPECT_GT(bytes[0], size_t(8) << 20);  // the dense scan needs its buffers
+  // After a sparse scan only the fixed per-thread index (1 MiB + mask) and small buffers stay.
+  EXPECT_LT(bytes[1], bytes[0] / 2);
+  EXPECT_LT(bytes[3], bytes[2] / 2);
+  EXPECT_TRUE(compareTrees(kept, fresh));
+}
+
 TEST(ScanIntegration, OneAndTwoThreadsGiveTheSameLabels) {
   SyntheticScene scene;
   const SyntheticScan scan = scene.defaultScan();

@@ -143,6 +143,10 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // Same, with points in the sensor frame and the sensor pose T_W_S.
   InsertStats insertSemanticScan(const octomap::Pointcloud& points_S,
                                  const std::vector<float>& evidence, const octomap::pose6d& T_W_S);
+  // Bytes of the scratch buffers kept for the next insert (not part of memoryUsage()): what the
+  // last scan needed; a buffer holding over twice that (and over 256 KiB) is released after the
+  // scan. 0 before the first insert.
+  size_t scratchBytes() const;
 
   // --- queries --------------------------------------------------------------------------
   VoxelOpinion opinion(const EvidentialOcTreeNode* node) const;  // node may be null

@@ -21,6 +21,8 @@ class ScanIntegrator {
   ScanIntegrator& operator=(const ScanIntegrator&) = delete;
 
   const SemanticConfig& config() const { return config_; }
+  // Bytes the scratch buffers kept for the next scan hold.
+  size_t scratchBytes() const;
 
   // points_W: N points in the world (tree) frame.
   // evidence: N x C row-major evidence, C = tree->numClasses().

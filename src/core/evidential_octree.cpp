@@ -165,6 +165,10 @@ InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& poin
   return insertSemanticScan(points_W, evidence, T_W_S.trans());
 }
 
+size_t EvidentialOcTree::scratchBytes() const {
+  return integrator_ ? integrator_->scratchBytes() : 0;
+}
+
 float* EvidentialOcTree::slot(uint32_t index) { return pool_->slot(index); }
 const float* EvidentialOcTree::slot(uint32_t index) const { return pool_->slot(index); }
 

@@ -37,7 +37,7 @@ void KernelPass::preparePoints(const SemanticPoints& points, int threads,
     KernelPoint& kp = (*out)[j];
     PointOpinion& o = kp.opinion;
     o = PointOpinion();
-    o.evidence = &points.evidence[j * num_classes_];
+    o.evidence = points.evidence[j];
     o.strength = num_classes_;
     float best = 0.0f;
     for (int c = 0; c < num_classes_; ++c) {

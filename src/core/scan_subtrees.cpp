@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "kept_buffers.h"
 #include "morton.h"
 #include "radix_sort.h"
 #include "ray_casting.h"
@@ -50,6 +51,7 @@ void ScanSubtrees::build(const EvidentialOcTree& tree, const VoxelBricks& rays,
     t.kernel.index.resize(size_t(1) << (3 * kSubtreeLevels), KernelRows::kNone);
     t.kernel.mask.resize(size_t(1) << (2 * kSubtreeLevels));
     t.kernel_cpu_ms = 0.0;
+    t.most_row_values = t.most_rows = t.most_updates = 0;
   }
   collectPointSubtrees();
   mergeSeeds();
@@ -160,6 +162,8 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
     const uint32_t j = point_subtrees_[p].second;
     kernel_->scatter((*kernel_points_)[j], points_->positions[j], base, &kernel);
   }
+  t.most_row_values = std::max(t.most_row_values, kernel.rows.size());
+  t.most_rows = std::max(t.most_rows, kernel.touched.size());
   kernel_->finishRows(&kernel);
   t.order.clear();
   for (uint32_t row = 0; row < kernel.touched.size(); ++row) {
@@ -205,7 +209,33 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
                          }
                        });
   while (row != t.order.cend()) emitRow();
+  t.most_updates = std::max(t.most_updates, t.updates.size());
   return {t.updates.data(), t.updates.data() + t.updates.size(), kernel.rows.data()};
+}
+
+size_t ScanSubtrees::capacityBytes() const {
+  size_t bytes = vectorBytes(point_subtrees_) + vectorBytes(seeds_) + vectorBytes(ranges_) +
+                 vectorBytes(threads_);
+  for (const PerThread& t : threads_) {
+    const KernelRows& k = t.kernel;
+    bytes += vectorBytes(k.mask) + vectorBytes(k.index) + vectorBytes(k.touched) +
+             vectorBytes(k.rows) + vectorBytes(k.axis_terms) + vectorBytes(t.order) +
+             vectorBytes(t.order_buffer) + vectorBytes(t.updates);
+  }
+  return bytes;
+}
+
+void ScanSubtrees::releaseExcess() {
+  releaseOversized(&point_subtrees_, point_subtrees_.size());
+  releaseOversized(&seeds_, seeds_.size());
+  releaseOversized(&ranges_, ranges_.size());
+  for (PerThread& t : threads_) {
+    releaseOversized(&t.kernel.rows, t.most_row_values);
+    releaseOversized(&t.kernel.touched, t.most_rows);
+    releaseOversized(&t.order, t.most_rows);
+    releaseOversized(&t.order_buffer, t.most_rows);
+    releaseOversized(&t.updates, t.most_updates);
+  }
 }
 
 double ScanSubtrees::kernelCpuMs() const {

@@ -26,6 +26,10 @@ class ScanSubtrees : public SubtreeSource {
              Targets targets);
   const std::vector<SubtreeSeed>& seeds() const override { return seeds_; }
   SubtreeView updates(size_t i, int thread, const EvidentialOcTreeNode* existing) override;
+  // Bytes the buffers hold (capacity, kept from scan to scan), and the release of what this
+  // scan did not need (kept_buffers.h), after the tree update.
+  size_t capacityBytes() const;
+  void releaseExcess();
   // CPU time the threads spent in the kernel loop since build() [ms].
   double kernelCpuMs() const;
 
@@ -40,6 +44,8 @@ class ScanSubtrees : public SubtreeSource {
     std::vector<std::pair<uint32_t, uint32_t>> order_buffer;
     std::vector<VoxelUpdate> updates;
     double kernel_cpu_ms = 0.0;
+    // The most this scan's subtrees needed: rows while scattering (doubles), rows, updates.
+    size_t most_row_values = 0, most_rows = 0, most_updates = 0;
   };
   void collectPointSubtrees();
   void mergeSeeds();

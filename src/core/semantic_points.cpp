@@ -92,7 +92,10 @@ void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticC
   }
   const size_t m = first_out.back();
   out->positions.resize(m);
-  out->evidence.resize(m * num_classes);
+  out->evidence.resize(m);
+  // Rows of their own for averaged cells, and for every point under an evidence floor.
+  const bool floored = config.evidence_floor > 0.0;
+  out->own.resize(average || floored ? m * num_classes : 0);
   const size_t num_cells = runs.size() - 1;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
   for (size_t r = 0; r < num_cells; ++r) {
@@ -102,7 +105,12 @@ void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticC
       size_t o = first_out[r];
       for (const auto* c = begin; c != end && o < first_out[r + 1]; ++c, ++o) {
         out->positions[o] = raw.positions[c->second];
-        std::copy_n(raw.evidence[c->second], num_classes, &out->evidence[o * num_classes]);
+        out->evidence[o] = raw.evidence[c->second];
+        if (floored) {
+          float* row = &out->own[o * num_classes];
+          std::copy_n(raw.evidence[c->second], num_classes, row);
+          out->evidence[o] = row;
+        }
       }
       continue;
     }
@@ -120,12 +128,13 @@ void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticC
     const double count = double(end - begin);
     const size_t o = first_out[r];
     out->positions[o] = octomap::point3d(float(x / count), float(y / count), float(z / count));
-    for (int k = 0; k < num_classes; ++k)
-      out->evidence[o * num_classes + k] = float(sums[k] / count);
+    float* mean = &out->own[o * num_classes];
+    for (int k = 0; k < num_classes; ++k) mean[k] = float(sums[k] / count);
+    out->evidence[o] = mean;
   }
   if (config.evidence_floor > 0.0) {
     const float floor = static_cast<float>(config.evidence_floor);
-    for (float& e : out->evidence) e = e < floor ? 0.0f : e;
+    for (float& e : out->own) e = e < floor ? 0.0f : e;
   }
 }
 

@@ -22,10 +22,12 @@ struct RawPoints {
   }
 };
 
-// Points and evidence that take part in the kernel pass.
+// Points and evidence that take part in the kernel pass. A point kept as it came names the
+// caller's evidence row rather than copying it (C floats per point, 10 MB a scan at C = 20).
 struct SemanticPoints {
   std::vector<octomap::point3d> positions;
-  std::vector<float> evidence;  // M x C
+  std::vector<const float*> evidence;  // C values each: the caller's row, or one of `own`
+  std::vector<float> own;  // C values per point: averaged cells' means, floored evidence
 };
 
 // Buffers of selectSemanticPoints, kept from scan to scan.

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstring>
 
+#include "kept_buffers.h"
+
 namespace evidential_octomap {
 
 BrickOffsets::BrickOffsets() {
@@ -28,6 +30,19 @@ void VoxelBricks::clear() {
     std::fill(slots_.begin(), slots_.end(), kEmptySlot);
   }
   last_coarse_ = ~0ull;
+}
+
+size_t VoxelBricks::capacityBytes() const {
+  return vectorBytes(codes_) + vectorBytes(bricks_) + vectorBytes(slots_) + vectorBytes(sorted_);
+}
+
+void VoxelBricks::releaseExcess() {
+  const size_t used = codes_.size();
+  releaseOversized(&codes_, used);
+  releaseOversized(&bricks_, used);
+  releaseOversized(&sorted_, used);
+  releaseOversized(&slots_, 2 * used);  // grow() keeps the table at most half full
+  clear();
 }
 
 uint32_t VoxelBricks::find(uint64_t code) const {

@@ -26,6 +26,10 @@ class VoxelBricks {
   void clear();
   bool empty() const { return codes_.empty(); }
   size_t numBricks() const { return codes_.size(); }
+  // Bytes the buffers hold (capacity, kept from scan to scan), and the release of what the
+  // last scan did not need (kept_buffers.h), which empties the set.
+  size_t capacityBytes() const;
+  void releaseExcess();
 
   // Sets `flag` (0..kFlags-1) of `key`; returns whether it was set before.
   bool testAndSet(const octomap::OcTreeKey& key, int flag) {
