@@ -245,12 +245,21 @@ def main():
     source_pub.publish(String(source))
     rospy.sleep(start_delay)  # let subscribers connect
     period = rospy.Duration.from_sec(1.0 / rate) if rate > 0 else rospy.Duration(0)
+    # Looping replays each cloud from memory (~12 MB a scan) with a new stamp: learned evidence
+    # takes the player ~1 s a scan to compute, which would otherwise bound the replay rate.
+    clouds = {}
     while not rospy.is_shutdown():
         for i, name in enumerate(scans):
             if rospy.is_shutdown():
                 break
             stamp = rospy.Time.now()
-            cloud, tf = scan_messages(i, name, stamp)
+            if i in clouds:
+                cloud, tf = clouds[i], make_tf(poses[int(name)], stamp, world, sensor)
+                cloud.header.stamp = stamp
+            else:
+                cloud, tf = scan_messages(i, name, stamp)
+                if loop:
+                    clouds[i] = cloud
             tf_pub.publish(TFMessage([tf]))
             rospy.sleep(0.05)  # TF first, so the mapping node's MessageFilter has it
             cloud_pub.publish(cloud)
