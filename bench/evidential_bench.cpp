@@ -361,6 +361,14 @@ int rssChild(const Options& o) {
   }
   std::printf("rss_after_map_mb %.3f\nrss_before_map_mb %.3f\npeak_rss_mb %.3f\n",
               evbench::currentRssMb(), before, evbench::peakRssMb());
+  if (const auto* semantic = dynamic_cast<const SemanticMethod*>(m.get())) {
+    const EvidentialOcTree& tree = *semantic->tree;
+    const size_t pool =
+        tree.memoryUsage() - tree.octomap::OccupancyOcTreeBase<EvidentialOcTreeNode>::memoryUsage();
+    std::printf("memory_usage_mb %.3f\nsemantic_leaves %zu\npool_bytes_per_semantic_leaf %.2f\n",
+                tree.memoryUsage() / 1048576.0, tree.numSemanticNodes(),
+                double(pool) / std::max<size_t>(1, tree.numSemanticNodes()));
+  }
   return 0;
 }
 

@@ -142,7 +142,7 @@ void exercise(EvidentialOcTree& tree, bool heavy) {
   size_t semantic = 0;
   for (auto it = tree.begin_tree(), end = tree.end_tree(); it != end; ++it) {
     checkOpinion(tree, &*it, "as read");
-    if (it.isLeaf() && tree.payload(&*it)) ++semantic;  // inner nodes name a leaf's payload
+    if (it.isLeaf() && it->hasSemantics()) ++semantic;  // inner nodes name a leaf's payload
   }
   require(semantic == tree.numSemanticNodes(), "numSemanticNodes() disagrees with the leaves");
   checkOpinion(tree, nullptr, "prior");

@@ -158,9 +158,8 @@ int main(int argc, char** argv) {
         key[2] += (i >> 2) & 1;
         auto* leaf = tree.leafForUpdate(key, true);
         leaf->setLogOdds(0.85f);
-        float* payload = tree.payloadForUpdate(leaf);
-        payload[0] = 1.5f;
-        payload[1] = 0.25f;
+        const float payload[2] = {1.5f, 0.25f};
+        tree.setPayload(leaf, payload);
       }
       tree.updateInnerNodes();
       save(tree, ot + "pruned_c2.ot");

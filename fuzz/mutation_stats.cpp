@@ -54,7 +54,6 @@ std::string brokenState(const EvidentialOcTree& tree) {
   }
   if (!(hit >= 0.5 && miss <= 0.5 && lo < hi)) return "inverted sensor model";
   if (!(lo <= 0.5 && hi >= 0.5)) return "clamping turns free into occupied or the reverse";
-  const int C = tree.numClasses();
   for (auto it = tree.begin_tree(), end = tree.end_tree(); it != end; ++it) {
     const EvidentialOcTreeNode* node = &*it;
     const auto o = tree.opinion(node);
@@ -64,24 +63,24 @@ std::string brokenState(const EvidentialOcTree& tree) {
     }
     if (!tree.nodeHasChildren(node)) continue;
     float max_child = -std::numeric_limits<float>::max();
-    const float* richest = nullptr;
+    std::vector<float> richest;
     double richest_sum = -1.0;
     for (unsigned i = 0; i < 8; ++i) {
       if (!tree.nodeChildExists(node, i)) continue;
       const EvidentialOcTreeNode* child = tree.getNodeChild(node, i);
       max_child = std::max(max_child, child->getLogOdds());
-      if (const float* p = tree.payload(child)) {
-        const double sum = std::accumulate(p, p + C, 0.0);
-        if (!richest || sum > richest_sum) {
+      if (const std::vector<float> p = tree.payload(child); !p.empty()) {
+        const double sum = std::accumulate(p.begin(), p.end(), 0.0);
+        if (richest.empty() || sum > richest_sum) {
           richest = p;
           richest_sum = sum;
         }
       }
     }
     if (node->getLogOdds() != max_child) return "inner log-odds != max of children";
-    const float* own = tree.payload(node);
-    if ((own == nullptr) != (richest == nullptr)) return "inner evidence without children's";
-    if (own && !std::equal(own, own + C, richest)) return "inner evidence != richest child's";
+    const std::vector<float> own = tree.payload(node);
+    if (own.empty() != richest.empty()) return "inner evidence without children's";
+    if (own != richest) return "inner evidence != richest child's";
   }
   return "";
 }

@@ -524,7 +524,7 @@ TEST(Integrity, SummariesAreDerivedAgainOnReading) {
   double best = -1.0;
   for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
     if (!it->hasSemantics() || it.getDepth() != tree->getTreeDepth()) continue;
-    const float* p = tree->payload(&*it);
+    const std::vector<float> p = tree->payload(&*it);
     const double sum = double(p[0]) + p[1] + p[2];
     if (sum > best) {
       best = sum;

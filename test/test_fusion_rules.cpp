@@ -270,17 +270,17 @@ TEST(DempsterRule, MapPayloadAgreesWithBeliefSpaceInBothOrders) {
     const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(1.0f, 2.0f, 0.5f));
     EvidentialOcTreeNode* node = tree.leafForUpdate(key, true);
     ASSERT_NE(node, nullptr);
-    float* payload = tree.payloadForUpdate(node);
-    ASSERT_NE(payload, nullptr);
-    for (int c = 0; c < num_classes; ++c) ASSERT_EQ(payload[c], tree.rule().prior());
+    EXPECT_TRUE(tree.payload(node).empty());
+    std::vector<float> payload(num_classes, tree.rule().prior());
 
     std::vector<std::vector<float>> evidence;
     std::vector<double> kernel;
     for (int i = 0; i < 8; ++i) {
       evidence.push_back(rnd.evidence(num_classes, 3.0));
       kernel.push_back(i % 2 ? 1.0 : rnd.uniform(0.0, 1.0));
-      fuse(tree.rule(), evidence.back(), kernel.back(), payload);
+      fuse(tree.rule(), evidence.back(), kernel.back(), payload.data());
     }
+    tree.setPayload(node, payload.data());
     tree.updateInnerNodes();
     node = tree.search(key);
     ASSERT_NE(node, nullptr);
@@ -465,8 +465,10 @@ TEST(FloatAbsorption, MillionFusionsIntoOneVoxelFollowTheRule) {
   RandomMasses rnd(400);
   EvidentialOcTree tree(0.2, num_classes);  // the default read-out cap
   const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(0.0f, 0.0f, 0.0f));
-  float* payload = tree.payloadForUpdate(tree.leafForUpdate(key, true));
-  test::RefBoundedEvidence reference(num_classes, kMaxStoredLogEvidence, tree.config().evidence_cap);
+  EvidentialOcTreeNode* leaf = tree.leafForUpdate(key, true);
+  std::vector<float> payload(num_classes, tree.rule().prior());
+  test::RefBoundedEvidence reference(num_classes, kMaxStoredLogEvidence,
+                                     tree.config().evidence_cap);
   const auto uncapped = FusionRule::create(FusionRuleType::kDempster);
   int next_check = 1;
   for (int n = 1; n <= kFusions; ++n) {
@@ -476,7 +478,8 @@ TEST(FloatAbsorption, MillionFusionsIntoOneVoxelFollowTheRule) {
     const double k = rnd.uniform(0.5, 1.0);
     std::vector<double> increments(num_classes, 0.0);
     tree.rule().contribute(pointOpinion(e), k, num_classes, increments.data());
-    tree.rule().add(payload, increments.data(), num_classes);
+    tree.rule().add(payload.data(), increments.data(), num_classes);
+    tree.setPayload(leaf, payload.data());
     reference.add(std::vector<long double>(increments.begin(), increments.end()));
     if (n == next_check || n == kFusions) {
       next_check *= 10;
@@ -494,7 +497,7 @@ TEST(FloatAbsorption, MillionFusionsIntoOneVoxelFollowTheRule) {
     }
   }
   // Read without the cap, the saturated voxel is as certain as floats can say: u ~ e^-1024 = 0.
-  const VoxelOpinion raw = uncapped->readout(payload, num_classes);
+  const VoxelOpinion raw = uncapped->readout(tree.payload(leaf).data(), num_classes);
   EXPECT_EQ(raw.label, kTrue);
   EXPECT_NEAR(raw.belief[kTrue], 1.0, 1e-6);
 }

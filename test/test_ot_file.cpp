@@ -221,7 +221,7 @@ TEST(OtFile, Format5CodesLogOddsByTableAndStoresLeafPayloadsInTheShorterForm) {
         continue;
       }
       payload_bytes += 1;
-      if (const float* p = tree->payload(&*it)) {
+      if (const std::vector<float> p = tree->payload(&*it); !p.empty()) {
         size_t differing = 0;
         for (int k = 0; k < c; ++k) differing += test::sameBits(p[k], prior) ? 0 : 1;
         const size_t sparse = 5 * differing;
@@ -297,9 +297,9 @@ TEST(OtFile, Format1FilesOfTheOldLibraryStillLoadLeafForLeaf) {
         payload.push_back(0.0f);
         std::memcpy(&payload.back(), &bits, 4);
       }
-      const float* p = tree->payload(&*it);
-      ASSERT_EQ(p != nullptr, !payload.empty());
-      if (!p) continue;
+      const std::vector<float> p = tree->payload(&*it);
+      ASSERT_EQ(p.empty(), payload.empty());
+      if (p.empty()) continue;
       ++semantic;
       for (int c = 0; c < tree->numClasses(); ++c) EXPECT_TRUE(test::sameBits(p[c], payload[c]));
     }
@@ -647,11 +647,11 @@ TEST(Merge, DempsterPayloadsAddAtSharedVoxels) {
   size_t shared = 0;
   for (auto it = ab.begin_leafs(); it != ab.end_leafs(); ++it) {
     if (it.getDepth() != ab.getTreeDepth()) continue;
-    const float* pa = a->payload(a->search(it.getKey()));
-    const float* pb = b->payload(b->search(it.getKey()));
-    const float* pab = ab.payload(&*it);
-    if (!pa || !pb) continue;
-    ASSERT_NE(pab, nullptr);
+    const std::vector<float> pa = a->payload(a->search(it.getKey()));
+    const std::vector<float> pb = b->payload(b->search(it.getKey()));
+    const std::vector<float> pab = ab.payload(&*it);
+    if (pa.empty() || pb.empty()) continue;
+    ASSERT_FALSE(pab.empty());
     for (int c = 0; c < ab.numClasses(); ++c) EXPECT_FLOAT_EQ(pab[c], pa[c] + pb[c]);
     ++shared;
   }
@@ -863,7 +863,7 @@ std::string wellFormedProblem(const EvidentialOcTree& tree) {
     if (!std::isfinite(it->getLogOdds())) return "non-finite log-odds";
     if (!it->hasSemantics()) continue;
     if (it.isLeaf()) ++semantic;  // inner nodes name a leaf's payload
-    if (!tree.payload(&*it)) return "semantic node without payload";
+    if (tree.payload(&*it).empty()) return "semantic node without payload";
     const VoxelOpinion v = tree.opinion(&*it);
     if (v.label < -1 || v.label >= tree.numClasses()) return "label out of range";
     if (!std::isfinite(v.uncertainty) || v.uncertainty < 0.0f) return "bad uncertainty";

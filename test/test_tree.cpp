@@ -22,6 +22,7 @@
 namespace evidential_octomap {
 namespace {
 
+using test::addToClass;
 using test::compareTrees;
 using test::SyntheticScene;
 
@@ -128,8 +129,9 @@ TEST(EvidentialOcTree, BytesPerLeafFreeAndSemantic) {
 
   std::uniform_real_distribution<float> evidence(0.0f, 3.0f);
   for (const auto& key : keys) {
-    float* p = tree.payloadForUpdate(tree.search(key));
-    for (int c = 0; c < num_classes; ++c) p[c] = evidence(rng);
+    std::vector<float> p(num_classes);
+    for (float& v : p) v = evidence(rng);
+    tree.setPayload(tree.search(key), p.data());
   }
   tree.updateInnerNodes();
   ASSERT_EQ(tree.getNumLeafNodes(), keys.size());
@@ -164,9 +166,9 @@ TEST(EvidentialOcTree, QueriesByPointAndKeyAgree) {
     EXPECT_EQ(by_key.uncertainty, by_node.uncertainty);
     if (it->hasSemantics()) {
       ++semantic;
-      EXPECT_NE(tree->payload(&*it), nullptr);
+      EXPECT_EQ(tree->payload(&*it).size(), size_t(tree->numClasses()));
     } else {
-      EXPECT_EQ(tree->payload(&*it), nullptr);
+      EXPECT_TRUE(tree->payload(&*it).empty());
       EXPECT_EQ(by_key.label, -1);
     }
   }
@@ -181,7 +183,7 @@ TEST(EvidentialOcTree, UnknownSpaceReadsAsVacuous) {
   const VoxelOpinion outside = tree->query(octomap::point3d(1e7f, 0.0f, 0.0f));  // beyond keys
   EXPECT_EQ(outside.label, -1);
   EXPECT_EQ(tree->opinion(nullptr).label, -1);
-  EXPECT_EQ(tree->payload(nullptr), nullptr);
+  EXPECT_TRUE(tree->payload(nullptr).empty());
 }
 
 // --- inner nodes and pruning
@@ -198,7 +200,7 @@ size_t expectInnerSummaries(const EvidentialOcTree& tree, const std::string& con
     for (unsigned i = 0; i < 8; ++i) {
       if (!tree.nodeChildExists(node, i)) continue;
       const EvidentialOcTreeNode* child = tree.getNodeChild(node, i);
-      if (const float* p = tree.payload(child)) {
+      if (const std::vector<float> p = tree.payload(child); !p.empty()) {
         double sum = 0;
         for (int c = 0; c < tree.numClasses(); ++c) sum += p[c];
         if (sum > richest_sum) {
@@ -213,8 +215,8 @@ size_t expectInnerSummaries(const EvidentialOcTree& tree, const std::string& con
     }
     EXPECT_TRUE(node->hasSemantics()) << context << ": inner node at depth " << it.getDepth();
     if (!node->hasSemantics()) continue;
-    const float* mine = tree.payload(node);
-    const float* theirs = tree.payload(richest);
+    const std::vector<float> mine = tree.payload(node);
+    const std::vector<float> theirs = tree.payload(richest);
     bool same = true;
     for (int c = 0; c < tree.numClasses(); ++c) same = same && test::sameBits(mine[c], theirs[c]);
     EXPECT_TRUE(same) << context << ": summary at depth " << it.getDepth()
@@ -252,7 +254,7 @@ TEST(InnerNodes, SummariesFollowEditsAndMerges) {
     ++it;
   ASSERT_NE(it, tree->end_leafs());
   const octomap::OcTreeKey key = it.getKey();
-  tree->payloadForUpdate(tree->leafForUpdate(key, false))[1] += 1000.0f;
+  addToClass(*tree, tree->leafForUpdate(key, false), 1, 1000.0f);
   tree->updateInnerNodes();
   expectInnerSummaries(*tree, "after an edit");
   EXPECT_EQ(tree->query(key, 1).label, 1);  // the richest voxel speaks for the whole map
@@ -293,9 +295,8 @@ TEST(Pruning, MergesIdenticalBlocksOnlyAndKeepsTheirAnswers) {
       const float value = (block == 3 && i == 5) ? -1.0f : -2.0f;
       tree.setNodeValue(key, value, true);
       if (block == 0) continue;
-      float* p = tree.payloadForUpdate(tree.leafForUpdate(key, true));
       const std::vector<float>& src = (block == 2 && i == 3) ? nearly : same;
-      std::copy(src.begin(), src.end(), p);
+      tree.setPayload(tree.leafForUpdate(key, true), src.data());
     }
   }
   tree.updateInnerNodes();  // also prunes
@@ -315,9 +316,9 @@ TEST(Pruning, MergesIdenticalBlocksOnlyAndKeepsTheirAnswers) {
   EXPECT_EQ(mismatches(tree, expected), 0u);
   // Updating one voxel inside a pruned block splits it and changes only that voxel.
   tree.prune();
-  float* p = tree.payloadForUpdate(tree.leafForUpdate(in_block1, false));
-  ASSERT_NE(p, nullptr);
-  p[2] += 5.0f;
+  EvidentialOcTreeNode* split = tree.leafForUpdate(in_block1, false);
+  ASSERT_NE(split, nullptr);
+  addToClass(tree, split, 2, 5.0f);
   tree.updateInnerNodes();
   const auto after = answersAtAllLeaves(tree);
   size_t changed = 0;
@@ -563,7 +564,7 @@ TEST(EvidentialOcTree, CopyIsEqualAndIndependent) {
     ASSERT_NE(it, tree->end_leafs());
     const octomap::OcTreeKey key = it.getKey();
     const VoxelOpinion before = copy.query(key);
-    tree->payloadForUpdate(tree->leafForUpdate(key, false))[2] += 50.0f;
+    addToClass(*tree, tree->leafForUpdate(key, false), 2, 50.0f);
     tree->updateInnerNodes();
     EXPECT_EQ(copy.query(key).belief, before.belief);
     EXPECT_FALSE(compareTrees(*tree, copy));
@@ -601,7 +602,7 @@ TEST(EvidentialOcTree, DeleteNodeThenCompactKeepsCountsConsistent) {
   for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
     if (it->hasSemantics()) {
       ++counted;
-      ASSERT_NE(tree->payload(&*it), nullptr);
+      ASSERT_FALSE(tree->payload(&*it).empty());
     }
   }
   EXPECT_EQ(tree->numSemanticNodes(), counted);

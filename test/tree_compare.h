@@ -9,6 +9,7 @@
 #include <cstring>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
 
@@ -22,6 +23,14 @@ static_assert(sizeof(EvidentialOcTreeNode) == sizeof(octomap::OcTreeNode),
 
 inline bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
 inline bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof(double)) == 0; }
+
+// Adds `amount` to class c of a leaf's payload (the prior where it has none): a hand edit.
+inline void addToClass(EvidentialOcTree& tree, EvidentialOcTreeNode* leaf, int c, float amount) {
+  std::vector<float> p = tree.payload(leaf);
+  if (p.empty()) p.assign(tree.numClasses(), tree.rule().prior());
+  p[c] += amount;
+  tree.setPayload(leaf, p.data());
+}
 
 namespace detail {
 
@@ -38,13 +47,13 @@ inline bool compareNodes(const EvidentialOcTree& a, const EvidentialOcTreeNode* 
     *why = where + ": payload present in only one tree";
     return false;
   }
-  const float* pa = a.payload(na);
-  const float* pb = b.payload(nb);
-  if ((pa == nullptr) != (pb == nullptr) || (pa == nullptr) == na->hasSemantics()) {
+  const std::vector<float> pa = a.payload(na);
+  const std::vector<float> pb = b.payload(nb);
+  if (pa.size() != pb.size() || pa.empty() == na->hasSemantics()) {
     *why = where + ": payload() disagrees with hasSemantics()";
     return false;
   }
-  if (pa) {
+  if (!pa.empty()) {
     for (int c = 0; c < a.numClasses(); ++c) {
       if (!sameBits(pa[c], pb[c])) {
         std::ostringstream s;

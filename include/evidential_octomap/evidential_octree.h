@@ -1,9 +1,11 @@
 // EvidentialOcTree: an OctoMap occupancy tree whose voxels also carry fused semantic evidence.
 // Shaped like OctoMap's ColorOcTree (node type, tree type, static registration), with one
-// difference: the C floats of semantic evidence live in a pool owned by the tree and the node
-// keeps a 32-bit index into it. A node therefore costs exactly what an OcTreeNode costs (16 B);
-// only leaves that received evidence pay 4*C bytes more. An inner node stores no payload of its
-// own: its index names the payload of its richest leaf (see updateInnerNodes).
+// difference: the C floats of semantic evidence live in a store owned by the tree and the node
+// keeps a 32-bit reference into it. A node therefore costs exactly what an OcTreeNode costs
+// (16 B); only leaves that received evidence pay for a payload, and only for the classes whose
+// value differs from the rule's prior (a sparse slot; readers get all C floats decoded). An inner
+// node stores no payload of its own: its reference names the payload of its richest leaf (see
+// updateInnerNodes).
 #pragma once
 
 #include <octomap/OcTreeNode.h>
@@ -23,7 +25,7 @@
 namespace evidential_octomap {
 
 class EvidentialOcTree;
-class PayloadPool;
+class PayloadStore;
 class ScanIntegrator;
 class SubtreeSource;
 struct SubtreeSeed;
@@ -156,9 +158,12 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   const EvidentialOcTreeNode* nodeAt(const octomap::point3d& point_W) const;
   VoxelOpinion query(const octomap::point3d& point_W) const;  // opinion(nodeAt(point_W))
   VoxelOpinion query(const octomap::OcTreeKey& key, unsigned depth = 0) const;
-  // The node's C floats (rule-specific, see fusion_rule.h), or nullptr if it has none. For an
-  // inner node, the payload of its richest leaf.
-  const float* payload(const EvidentialOcTreeNode* node) const;
+  // The node's C floats (rule-specific, see fusion_rule.h) decoded into `out` (room for C
+  // floats); false, leaving `out` untouched, if it has none (or node is null). For an inner
+  // node, the payload of its richest leaf.
+  bool payload(const EvidentialOcTreeNode* node, float* out) const;
+  // The same as a vector: C floats, or empty if the node has none.
+  std::vector<float> payload(const EvidentialOcTreeNode* node) const;
   // Leaves that hold semantic evidence (each owns one payload slot).
   size_t numSemanticNodes() const;
 
@@ -166,9 +171,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // Leaf at full depth for `key`, expanding pruned nodes; created (log-odds 0) when missing and
   // `create`, else nullptr.
   EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);
-  // The leaf's payload, allocated with the rule's prior first if it had none. Throws
-  // std::invalid_argument for an inner node (its summary follows its leaves: updateInnerNodes).
-  float* payloadForUpdate(EvidentialOcTreeNode* leaf);
+  // Sets the leaf's C floats (allocating its payload if it had none). The summaries above it
+  // follow at updateInnerNodes(). Throws std::invalid_argument for an inner node.
+  void setPayload(EvidentialOcTreeNode* leaf, const float* values);
   void clearPayload(EvidentialOcTreeNode* node);
   // Applies a whole scan in one pass over the tree: updates are sorted in Morton order (so every
   // subtree is visited once), missing leaves are created for occupancy updates (and for
@@ -202,7 +207,8 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   void setClampingThresLog(float min_log_odds, float max_log_odds);
   // Clamps every node's log-odds to the current bounds, then recomputes inner nodes and prunes.
   void clampOccupancy();
-  // Rebuilds the payload pool from the nodes that are still in the tree (after deleteNode).
+  // Rebuilds the payload store from the nodes that are still in the tree (after deleteNode),
+  // each payload in the smallest slot that holds it.
   void compactPayloads();
 
   // --- OctoMap overrides ----------------------------------------------------------------
@@ -237,14 +243,16 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   friend class ScanIntegrator;
 
   void setNumClasses(int num_classes);
-  float* slot(uint32_t index);
-  const float* slot(uint32_t index) const;
   void checkCompatible(const EvidentialOcTree& other, const char* what) const;
   // into += from - prior per class, saturating at FLT_MAX (crafted files may hold huge values).
   void addPayload(float* into, const float* from) const;
   void commit(Edit& edit);
   EvidentialOcTreeNode* createChild(EvidentialOcTreeNode* node, unsigned i, Edit& edit);
-  float* leafPayload(EvidentialOcTreeNode* leaf, Edit& edit);
+  // A leaf's C floats into `out`: its payload, or the prior when it has none.
+  void leafValues(const EvidentialOcTreeNode* leaf, float* out) const;
+  void storeLeafValues(EvidentialOcTreeNode* leaf, const float* values, Edit& edit);
+  // leaf's payload += from - prior (addPayload), stored.
+  void addToLeaf(EvidentialOcTreeNode* leaf, const float* from, Edit& edit);
   void releaseLeafPayload(EvidentialOcTreeNode* leaf, Edit& edit);
   void expandLeaf(EvidentialOcTreeNode* node, Edit& edit);
   bool pruneChildren(EvidentialOcTreeNode* node, Edit& edit);
@@ -287,7 +295,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   std::vector<std::string> class_names_;
   SemanticConfig config_;
   std::unique_ptr<FusionRule> rule_;
-  std::unique_ptr<PayloadPool> pool_;  // C floats per semantic leaf
+  std::unique_ptr<PayloadStore> pool_;  // one sparse payload per semantic leaf
   std::string read_error_;
   bool created_for_read_ = false;               // made by create(), readData not called yet
   std::unique_ptr<ScanIntegrator> integrator_;  // created on first insert; keeps scratch buffers

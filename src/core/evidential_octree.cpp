@@ -13,7 +13,7 @@
 #include "evidential_octomap/safe_key.h"
 #include "evidential_octomap/scan_integrator.h"
 #include "node_allocator.h"
-#include "payload_pool.h"
+#include "payload_store.h"
 #include "tree_edit.h"
 
 namespace evidential_octomap {
@@ -57,7 +57,7 @@ void EvidentialOcTreeNode::deleteLeafChildren() {
 
 EvidentialOcTree::EvidentialOcTree(double resolution, int num_classes, const SemanticConfig& config)
     : OccupancyOcTreeBase<EvidentialOcTreeNode>(resolution),
-      pool_(std::make_unique<PayloadPool>(1)) {
+      pool_(std::make_unique<PayloadStore>(1, 0.0f)) {
   setNumClasses(num_classes);
   setConfig(config);
   evidential_octree_member_init_.ensureLinking();
@@ -76,7 +76,7 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
       class_names_(rhs.class_names_),
       config_(rhs.config_),
       rule_(FusionRule::create(rhs.config_)),
-      pool_(std::make_unique<PayloadPool>(rhs.num_classes_)) {
+      pool_(std::make_unique<PayloadStore>(rhs.num_classes_, rhs.rule_->prior())) {
   // OctoMap's own copy constructor slices derived nodes, so the nodes are copied here.
   clamping_thres_min = rhs.clamping_thres_min;
   clamping_thres_max = rhs.clamping_thres_max;
@@ -102,7 +102,7 @@ void EvidentialOcTree::setNumClasses(int num_classes) {
   }
   clear();
   num_classes_ = num_classes;
-  pool_->reset(num_classes);
+  pool_->reset(num_classes, pool_->prior());
   class_names_.clear();
   for (int c = 0; c < num_classes; ++c) class_names_.push_back("class_" + std::to_string(c));
 }
@@ -128,6 +128,7 @@ void EvidentialOcTree::setConfig(const SemanticConfig& config) {
   }
   config_ = config;
   rule_ = std::move(rule);
+  pool_->setPrior(rule_->prior());  // refused above while payloads depend on it
   integrator_.reset();
 }
 
@@ -169,19 +170,24 @@ size_t EvidentialOcTree::scratchBytes() const {
   return integrator_ ? integrator_->scratchBytes() : 0;
 }
 
-float* EvidentialOcTree::slot(uint32_t index) { return pool_->slot(index); }
-const float* EvidentialOcTree::slot(uint32_t index) const { return pool_->slot(index); }
+bool EvidentialOcTree::payload(const EvidentialOcTreeNode* node, float* out) const {
+  if (!node || !node->hasSemantics()) return false;
+  pool_->decode(node->payload_, out);
+  return true;
+}
 
-const float* EvidentialOcTree::payload(const EvidentialOcTreeNode* node) const {
-  return (node && node->hasSemantics()) ? slot(node->payload_) : nullptr;
+std::vector<float> EvidentialOcTree::payload(const EvidentialOcTreeNode* node) const {
+  std::vector<float> values(num_classes_);
+  if (!payload(node, values.data())) values.clear();
+  return values;
 }
 
 size_t EvidentialOcTree::numSemanticNodes() const { return pool_->inUse(); }
 
 VoxelOpinion EvidentialOcTree::opinion(const EvidentialOcTreeNode* node) const {
-  if (const float* data = payload(node)) return rule_->readout(data, num_classes_);
-  const std::vector<float> prior(num_classes_, rule_->prior());
-  return rule_->readout(prior.data(), num_classes_);
+  float values[kMaxClasses];
+  if (!payload(node, values)) std::fill_n(values, num_classes_, rule_->prior());
+  return rule_->readout(values, num_classes_);
 }
 
 const EvidentialOcTreeNode* EvidentialOcTree::nodeAt(const octomap::point3d& point_W) const {
@@ -212,12 +218,21 @@ EvidentialOcTreeNode* EvidentialOcTree::createChild(EvidentialOcTreeNode* node, 
   return node->addChild(i);
 }
 
-float* EvidentialOcTree::leafPayload(EvidentialOcTreeNode* leaf, Edit& edit) {
-  if (!leaf->hasSemantics()) {
-    leaf->payload_ = edit.slots.allocate();
-    std::fill_n(slot(leaf->payload_), num_classes_, rule_->prior());
-  }
-  return slot(leaf->payload_);
+void EvidentialOcTree::leafValues(const EvidentialOcTreeNode* leaf, float* out) const {
+  if (!payload(leaf, out)) std::fill_n(out, num_classes_, rule_->prior());
+}
+
+// The leaf's reference may change (a larger slot): the summaries above follow at their update.
+void EvidentialOcTree::storeLeafValues(EvidentialOcTreeNode* leaf, const float* values,
+                                       Edit& edit) {
+  leaf->payload_ = edit.slots.store(leaf->payload_, values);
+}
+
+void EvidentialOcTree::addToLeaf(EvidentialOcTreeNode* leaf, const float* from, Edit& edit) {
+  float values[kMaxClasses];
+  leafValues(leaf, values);
+  addPayload(values, from);
+  storeLeafValues(leaf, values, edit);
 }
 
 void EvidentialOcTree::releaseLeafPayload(EvidentialOcTreeNode* leaf, Edit& edit) {
@@ -233,12 +248,7 @@ void EvidentialOcTree::expandLeaf(EvidentialOcTreeNode* node, Edit& edit) {
     EvidentialOcTreeNode* child = createChild(node, i, edit);
     child->copyData(*node);
     if (!node->hasSemantics()) continue;
-    if (i == 0) {
-      child->payload_ = node->payload_;
-    } else {
-      child->payload_ = edit.slots.allocate();
-      std::copy_n(slot(node->payload_), num_classes_, slot(child->payload_));
-    }
+    child->payload_ = i == 0 ? node->payload_ : edit.slots.copy(node->payload_);
   }
 }
 
@@ -257,15 +267,14 @@ bool EvidentialOcTree::pruneChildren(EvidentialOcTreeNode* node, Edit& edit) {
 
 // --- the editing API -----------------------------------------------------------------------------
 
-float* EvidentialOcTree::payloadForUpdate(EvidentialOcTreeNode* leaf) {
+void EvidentialOcTree::setPayload(EvidentialOcTreeNode* leaf, const float* values) {
   if (nodeHasChildren(leaf)) {
     throw std::invalid_argument(
-        "payloadForUpdate needs a leaf; inner summaries follow their leaves (updateInnerNodes)");
+        "setPayload needs a leaf; inner summaries follow their leaves (updateInnerNodes)");
   }
   Edit edit(pool_.get(), 1);
-  float* data = leafPayload(leaf, edit);
+  storeLeafValues(leaf, values, edit);
   commit(edit);
-  return data;
 }
 
 void EvidentialOcTree::clearPayload(EvidentialOcTreeNode* node) {
@@ -312,8 +321,7 @@ const EvidentialOcTreeNode* EvidentialOcTree::richestChild(const EvidentialOcTre
     if (!nodeChildExists(node, i)) continue;
     const EvidentialOcTreeNode* child = getNodeChild(node, i);
     if (!child->hasSemantics()) continue;
-    const float* data = slot(child->payload_);
-    const double sum = std::accumulate(data, data + num_classes_, 0.0);
+    const double sum = pool_->sum(child->payload_);
     if (sum > richest_sum) {
       richest_sum = sum;
       richest = child;
@@ -360,7 +368,8 @@ void EvidentialOcTree::linkSummariesRecurs(EvidentialOcTreeNode* node, unsigned 
 }
 
 void EvidentialOcTree::compactPayloads() {
-  auto packed = std::make_unique<PayloadPool>(num_classes_);
+  auto packed = std::make_unique<PayloadStore>(num_classes_, rule_->prior());
+  float values[kMaxClasses];
   {
     Edit edit(packed.get(), 1024);
     std::vector<EvidentialOcTreeNode*> stack;
@@ -369,9 +378,8 @@ void EvidentialOcTree::compactPayloads() {
       EvidentialOcTreeNode* node = stack.back();
       stack.pop_back();
       if (!nodeHasChildren(node) && node->hasSemantics()) {
-        const uint32_t index = edit.slots.allocate();
-        std::copy_n(slot(node->payload_), num_classes_, packed->slot(index));
-        node->payload_ = index;
+        pool_->decode(node->payload_, values);
+        node->payload_ = edit.slots.store(PayloadStore::kNone, values);
       }
       for (unsigned i = 0; i < 8; ++i) {
         if (nodeChildExists(node, i)) stack.push_back(getNodeChild(node, i));
@@ -389,9 +397,8 @@ void EvidentialOcTree::copySubtree(const EvidentialOcTree& from, const Evidentia
                                    EvidentialOcTreeNode* dst, Edit& edit) {
   dst->setValue(src->getValue());
   if (!from.nodeHasChildren(src)) {
-    if (src->hasSemantics()) {
-      std::copy_n(from.slot(src->payload_), num_classes_, leafPayload(dst, edit));
-    }
+    float values[kMaxClasses];
+    if (from.payload(src, values)) storeLeafValues(dst, values, edit);
     return;
   }
   for (unsigned i = 0; i < 8; ++i) {
@@ -422,9 +429,11 @@ void EvidentialOcTree::addPayload(float* into, const float* from) const {
 void EvidentialOcTree::addEvidence(const EvidentialOcTree& evidence, EvidentialOcTree* rest) {
   checkCompatible(evidence, "addEvidence");
   if (rest) checkCompatible(*rest, "addEvidence");
+  Edit edit(pool_.get(), 1024);
+  std::unique_ptr<Edit> rest_edit(rest ? new Edit(rest->pool_.get(), 1024) : nullptr);
+  float from[kMaxClasses];
   for (auto it = evidence.begin_leafs(); it != evidence.end_leafs(); ++it) {
-    const float* from = evidence.payload(&*it);
-    if (!from) continue;
+    if (!evidence.payload(&*it, from)) continue;
     // A pruned block of the source stands for each of its voxels.
     const unsigned level = tree_depth - it.getDepth();
     const octomap::key_type mask = static_cast<octomap::key_type>(~((1u << level) - 1u));
@@ -436,14 +445,18 @@ void EvidentialOcTree::addEvidence(const EvidentialOcTree& evidence, EvidentialO
         for (unsigned dz = 0; dz < span; ++dz) {
           const octomap::OcTreeKey key(base[0] + dx, base[1] + dy, base[2] + dz);
           if (search(key)) {
-            addPayload(payloadForUpdate(leafForUpdate(key, false)), from);
+            addToLeaf(leafForUpdate(key, false), from, edit);
           } else if (rest) {
-            rest->addPayload(rest->payloadForUpdate(rest->leafForUpdate(key, true)), from);
+            rest->addToLeaf(rest->leafForUpdate(key, true), from, *rest_edit);
           }
         }
   }
+  commit(edit);
   updateInnerNodes();
-  if (rest) rest->updateInnerNodes();
+  if (rest) {
+    rest->commit(*rest_edit);
+    rest->updateInnerNodes();
+  }
 }
 
 void EvidentialOcTree::setClampingThresLog(float min_log_odds, float max_log_odds) {
@@ -478,7 +491,8 @@ void EvidentialOcTree::merge(const EvidentialOcTree& other) {
   auto fuseLeaf = [&](EvidentialOcTreeNode* dst, const EvidentialOcTreeNode* src) {
     dst->setLogOdds(clampLogOdds(dst->getLogOdds() + src->getLogOdds(), clamping_thres_min,
                                  clamping_thres_max));
-    if (src->hasSemantics()) addPayload(leafPayload(dst, edit), other.slot(src->payload_));
+    float from[kMaxClasses];
+    if (other.payload(src, from)) addToLeaf(dst, from, edit);
   };
   // Applies src (a leaf) to every leaf below dst; children dst lacks become copies of src.
   std::function<void(EvidentialOcTreeNode*, const EvidentialOcTreeNode*)> spread =
@@ -516,17 +530,19 @@ bool EvidentialOcTree::isNodeCollapsible(const EvidentialOcTreeNode* node) const
   if (!nodeChildExists(node, 0)) return false;
   const EvidentialOcTreeNode* first = getNodeChild(node, 0);
   if (nodeHasChildren(first)) return false;
-  const float* first_payload = payload(first);
   for (unsigned i = 1; i < 8; ++i) {
     if (!nodeChildExists(node, i)) return false;
     const EvidentialOcTreeNode* child = getNodeChild(node, i);
     if (nodeHasChildren(child) || child->getValue() != first->getValue()) return false;
     // Unlike ColorOcTree, semantics must be identical too, so pruning never changes a query.
-    const float* child_payload = payload(child);
-    if ((first_payload == nullptr) != (child_payload == nullptr)) return false;
-    if (first_payload && !std::equal(first_payload, first_payload + num_classes_, child_payload)) {
-      return false;
-    }
+    if (first->hasSemantics() != child->hasSemantics()) return false;
+  }
+  if (!first->hasSemantics()) return true;
+  float first_values[kMaxClasses], child_values[kMaxClasses];
+  pool_->decode(first->payload_, first_values);
+  for (unsigned i = 1; i < 8; ++i) {
+    pool_->decode(getNodeChild(node, i)->payload_, child_values);
+    if (!std::equal(first_values, first_values + num_classes_, child_values)) return false;
   }
   return true;
 }
@@ -551,7 +567,7 @@ void EvidentialOcTree::prune() {
 
 void EvidentialOcTree::clear() {
   OccupancyOcTreeBase<EvidentialOcTreeNode>::clear();
-  if (pool_) pool_->reset(num_classes_);
+  if (pool_) pool_->reset(num_classes_, pool_->prior());
 }
 
 size_t EvidentialOcTree::memoryUsage() const {

@@ -173,7 +173,7 @@ std::unique_ptr<octomap::ColorOcTree> toColorOcTree(const EvidentialOcTree& tree
   if (mode == ColorMode::kUncertainty && !tree.rule().uncertaintyIsMass()) {
     max_uncertainty = 0.0f;
     for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
-      if (tree.payload(&*it)) {
+      if (it->hasSemantics()) {
         max_uncertainty = std::max(max_uncertainty, tree.opinion(&*it).uncertainty);
       }
     }
@@ -184,7 +184,7 @@ std::unique_ptr<octomap::ColorOcTree> toColorOcTree(const EvidentialOcTree& tree
   std::stringstream data;
   std::function<void(const EvidentialOcTreeNode*)> writeNode = [&](const EvidentialOcTreeNode* node) {
     ClassTable::Rgb rgb{128, 128, 128};  // no semantic evidence
-    if (tree.payload(node)) {
+    if (node->hasSemantics()) {
       const VoxelOpinion o = tree.opinion(node);
       if (mode == ColorMode::kClass && o.label >= 0) rgb = classes.colors[o.label];
       if (mode == ColorMode::kUncertainty) rgb = uncertaintyColor(o.uncertainty / max_uncertainty);

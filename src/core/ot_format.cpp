@@ -34,7 +34,7 @@
 #include "crc32.h"
 #include "log_odds_table.h"
 #include "evidential_octomap/evidential_octree.h"
-#include "payload_pool.h"
+#include "payload_store.h"
 #include "tree_edit.h"
 
 namespace evidential_octomap {
@@ -268,7 +268,8 @@ bool EvidentialOcTree::writeNodes(const EvidentialOcTreeNode* root_node, const L
 void EvidentialOcTree::writePayload(const EvidentialOcTreeNode* leaf, float prior,
                                     SectionWriter& out) const {
   if (!leaf->hasSemantics()) return out.pod(kNoPayloadTag);
-  const float* payload = slot(leaf->payload_);
+  float payload[kMaxClasses];
+  this->payload(leaf, payload);
   int differing = 0;
   for (int c = 0; c < num_classes_; ++c) differing += sameBits(payload[c], prior) ? 0 : 1;
   if (5 * differing < 4 * num_classes_ && differing <= 255 - kSparseTag) {  // 5 B vs 4 B a class
@@ -451,12 +452,14 @@ void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned dept
   const std::string problem = innerNodeProblem(node);
   if (!problem.empty()) throw FormatError(problem + " (corrupt node data)");
   linkSummary(node);
-  if (coding.version < kFormatSparseNodes) {  // the stored summary must be the one derived from the children
-    const float* derived = payload(node);
-    if ((derived == nullptr) != summary.empty() ||
-        (derived && !std::equal(summary.begin(), summary.end(), derived, sameBits))) {
-      throw FormatError(derived ? "an inner node's evidence is not its richest child's"
-                                : "an inner node holds evidence none of its children holds");
+  if (coding.version < kFormatSparseNodes) {
+    // The stored summary must be the one derived from the children.
+    const std::vector<float> derived = payload(node);
+    if (derived.empty() != summary.empty() ||
+        !std::equal(summary.begin(), summary.end(), derived.begin(), sameBits)) {
+      throw FormatError(!derived.empty()
+                            ? "an inner node's evidence is not its richest child's"
+                            : "an inner node holds evidence none of its children holds");
     }
   }
 }
@@ -465,7 +468,9 @@ void EvidentialOcTree::readNodesRecurs(EvidentialOcTreeNode* node, unsigned dept
 void EvidentialOcTree::readPayload(EvidentialOcTreeNode* leaf, uint8_t tag, SectionReader& in,
                                    Edit& edit) {
   if (tag == kNoPayloadTag) return;
-  float* data = leafPayload(leaf, edit);  // filled with the prior
+  const float prior = rule_->prior();
+  float data[kMaxClasses];
+  std::fill_n(data, num_classes_, prior);
   if (tag == kDenseTag) {
     in.bytes(data, sizeof(float) * num_classes_, "node data");
   } else {
@@ -481,12 +486,12 @@ void EvidentialOcTree::readPayload(EvidentialOcTreeNode* leaf, uint8_t tag, Sect
   }
   // Every writer keeps payloads at or above the rule's prior (dempster: L >= 0); anything
   // else reads out as NaN or negative beliefs.
-  const float prior = rule_->prior();
   for (int c = 0; c < num_classes_; ++c) {
     if (!std::isfinite(data[c]) || data[c] < prior) {
       throw FormatError("a payload is not finite or below the rule's prior");
     }
   }
+  storeLeafValues(leaf, data, edit);
 }
 
 }  // namespace evidential_octomap

@@ -9,7 +9,7 @@
 
 #include "evidential_octomap/evidential_octree.h"
 #include "morton.h"
-#include "payload_pool.h"
+#include "payload_store.h"
 #include "radix_sort.h"
 #include "subtree_updates.h"
 #include "tree_edit.h"
@@ -250,8 +250,10 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
       updateNodeLogOdds(node, begin->occupancy > 0 ? prob_hit_log : prob_miss_log);
     }
     if (begin->increments == VoxelUpdate::kNoIncrements) return 0;
-    rule_->add(leafPayload(node, edit), batch.rows + size_t(begin->increments) * num_classes_,
-               num_classes_);
+    float values[kMaxClasses];
+    leafValues(node, values);
+    rule_->add(values, batch.rows + size_t(begin->increments) * num_classes_, num_classes_);
+    storeLeafValues(node, values, edit);
     return 1;
   }
   if (!is_new && !nodeHasChildren(node)) {

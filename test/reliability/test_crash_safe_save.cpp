@@ -99,8 +99,9 @@ std::unique_ptr<EvidentialOcTree> blockMap(int side, int num_classes, unsigned s
         const octomap::OcTreeKey key(origin[0] + x, origin[1] + y, origin[2] + z);
         EvidentialOcTreeNode* leaf = tree->leafForUpdate(key, true);
         leaf->setLogOdds(value(rng) / 20.0f - 1.0f);
-        float* payload = tree->payloadForUpdate(leaf);
-        for (int c = 0; c < num_classes; ++c) payload[c] = value(rng);
+        std::vector<float> payload(num_classes);
+        for (float& v : payload) v = value(rng);
+        tree->setPayload(leaf, payload.data());
       }
     }
   }

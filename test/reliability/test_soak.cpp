@@ -49,8 +49,8 @@ ReadoutCheck checkAll(const EvidentialOcTree& tree) {
   ReadoutCheck check;
   for (auto it = tree.begin_tree(), end = tree.end_tree(); it != end; ++it) {
     ++check.nodes;
-    const float* payload = tree.payload(&*it);
-    if (!payload) continue;
+    const std::vector<float> payload = tree.payload(&*it);
+    if (payload.empty()) continue;
     ++check.semantic;
     for (int c = 0; c < tree.numClasses(); ++c) {
       check.max_payload = std::max(check.max_payload, payload[c]);

@@ -104,7 +104,7 @@ Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
       if (node && node->getLogOdds() >= 0.0f) ++r.occupied;  // occupied: p >= 0.5
       std::vector<long double> prob(C, 1.0L / C);
       int s = -1;
-      if (const float* raw = node ? tree.payload(node) : nullptr) {
+      if (const std::vector<float> raw = tree.payload(node); !raw.empty()) {
         long double total = 0.0L, best = 0.0L;
         for (int c = 0; c < C; ++c) {
           total += raw[c];

@@ -21,8 +21,9 @@ void setVoxel(EvidentialOcTree& tree, const octomap::point3d& p, bool occupied,
   if (payload.empty()) return;
   EvidentialOcTreeNode* node = tree.leafForUpdate(key, false);
   ASSERT_NE(node, nullptr);
-  float* slot = tree.payloadForUpdate(node);
-  for (size_t c = 0; c < payload.size(); ++c) slot[c] = payload[c];
+  std::vector<float> values(tree.numClasses(), tree.rule().prior());
+  std::copy(payload.begin(), payload.end(), values.begin());
+  tree.setPayload(node, values.data());
 }
 
 const ErrorDetection& detectionOf(const QualityMetrics& q, const std::string& output) {

@@ -37,8 +37,9 @@ struct Scene {
     const auto key = tree.coordToKey(p);
     tree.updateNode(key, true);
     if (payload.empty()) return;
-    float* slot = tree.payloadForUpdate(tree.leafForUpdate(key, false));
-    for (size_t i = 0; i < payload.size(); ++i) slot[i] = payload[i];
+    std::vector<float> values(tree.numClasses(), tree.rule().prior());
+    std::copy(payload.begin(), payload.end(), values.begin());
+    tree.setPayload(tree.leafForUpdate(key, false), values.data());
   }
 };
 }  // namespace

@@ -13,8 +13,8 @@ int main() {
   points.push_back(2.101f, 1.001f, 0.501f);
   points.push_back(2.102f, 1.002f, 0.502f);
   tree.insertSemanticScan(points, {3e38f, 0.f, 0.f, 3e38f, 0.f, 0.f}, octomap::point3d(0, 0, 0.5f));
-  const float* payload = tree.payload(tree.search(octomap::point3d(2.1f, 1.0f, 0.5f)));
-  std::cout << "huge evidence: payload " << (payload ? payload[0] : -1.f) << ", label "
+  const std::vector<float> payload = tree.payload(tree.search(octomap::point3d(2.1f, 1.0f, 0.5f)));
+  std::cout << "huge evidence: payload " << (payload.empty() ? -1.f : payload[0]) << ", label "
             << tree.query(octomap::point3d(2.1f, 1.0f, 0.5f)).label;
   try {
     saveMap(tree, "huge.ot");
