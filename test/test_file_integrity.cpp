@@ -69,6 +69,27 @@ std::unique_ptr<EvidentialOcTree> smallMap() {
   return tree;
 }
 
+// The bytes of `tree`'s .ot, with OctoMap's header at full precision.
+std::string otBytes(const EvidentialOcTree& tree) {
+  std::ostringstream out;
+  out << std::setprecision(17);
+  tree.write(out);
+  return out.str();
+}
+
+// `file` must be refused by the reader with an error that contains `message`.
+void expectRefused(const Scratch& scratch, const std::string& file, const std::string& message,
+                   const std::string& what) {
+  const std::string path = scratch.file("refused.ot");
+  writeBytes(path, file);
+  try {
+    loadMap(path);
+    ADD_FAILURE() << what << ": loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << what << ": " << e.what();
+  }
+}
+
 // Where the data section (after OctoMap's "data\n" line) starts.
 size_t sectionStart(const std::string& bytes) {
   const size_t at = bytes.find("\ndata\n");
@@ -283,11 +304,8 @@ TEST(Integrity, Format1To4FilesStillLoad) {
       evidence.insert(evidence.end(), {float(i), 2.0f, i % 3 ? 0.0f : 0.5f});
     }
     tree->insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.5f));
-    std::ostringstream out;
-    out << std::setprecision(17);
-    tree->write(out);
-    const std::string v4 = toFormat4(out.str(), *tree), v2 = toFormat2(v4, *tree);
-    ASSERT_GT(v4.size(), out.str().size()) << "format 4 stores f32 log-odds";
+    const std::string v5 = otBytes(*tree), v4 = toFormat4(v5, *tree), v2 = toFormat2(v4, *tree);
+    ASSERT_GT(v4.size(), v5.size()) << "format 4 stores f32 log-odds";
     ASSERT_GT(v2.size(), v4.size()) << "format 2 stores inner payloads";
     {
       const std::string path = scratch.file("format4.ot");
@@ -318,23 +336,13 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   Scratch scratch;
   const auto tree = smallMap();
   ASSERT_TRUE(tree->getRoot()->hasSemantics());
-  std::ostringstream out;
-  out << std::setprecision(17);
-  tree->write(out);
-  const std::string v5 = out.str(), v4 = toFormat4(v5, *tree), v2 = toFormat2(v4, *tree);
+  const std::string v5 = otBytes(*tree), v4 = toFormat4(v5, *tree), v2 = toFormat2(v4, *tree);
   const size_t root = rootOffset(v4, tree->size());
   float root_value;
   std::memcpy(&root_value, &v4[root], 4);
   ASSERT_EQ(root_value, tree->getRoot()->getValue()) << "root offset not found";
   auto refused = [&](const std::string& file, const std::string& what) {
-    const std::string path = scratch.file("inner.ot");
-    writeBytes(path, file);
-    try {
-      loadMap(path);
-      ADD_FAILURE() << what << ": an inconsistent inner node was loaded";
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find("inner node"), std::string::npos) << e.what();
-    }
+    expectRefused(scratch, file, "inner node", what);
   };
   const float other = root_value + 0.5f;
   for (std::string edited : {v4, v2}) {
@@ -368,23 +376,13 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
 TEST(Integrity, BadLogOddsCodingIsRefused) {
   Scratch scratch;
   const auto tree = smallMap();
-  std::ostringstream out;
-  out << std::setprecision(17);
-  tree->write(out);
-  const std::string v5 = out.str();
+  const std::string v5 = otBytes(*tree);
   const size_t coding = rootOffset(v5, tree->size());
   const uint32_t size = u32At(v5, coding + 1);
   ASSERT_GE(size, 2u);
   const auto refusedWith = [&](std::string file, const std::string& message) {
     reseal(&file);
-    const std::string path = scratch.file("coding.ot");
-    writeBytes(path, file);
-    try {
-      loadMap(path);
-      ADD_FAILURE() << message << ": loaded";
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
-    }
+    expectRefused(scratch, file, message, "log-odds coding");
   };
   std::string edited = v5;
   edited[coding] = 3;
@@ -407,10 +405,7 @@ TEST(Integrity, BadLogOddsCodingIsRefused) {
 TEST(Integrity, ClampsAboveOrBelowOneHalfAreRefused) {
   Scratch scratch;
   const auto tree = smallMap();
-  std::ostringstream out;
-  out << std::setprecision(17);
-  tree->write(out);
-  const std::string original = out.str();
+  const std::string original = otBytes(*tree);
   auto offsetOf = [&](float value) {  // the clamp's float in the section, once
     std::string pattern(4, '\0');
     std::memcpy(&pattern[0], &value, 4);
