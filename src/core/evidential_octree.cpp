@@ -6,7 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -430,7 +430,8 @@ void EvidentialOcTree::addEvidence(const EvidentialOcTree& evidence, EvidentialO
   checkCompatible(evidence, "addEvidence");
   if (rest) checkCompatible(*rest, "addEvidence");
   Edit edit(pool_.get(), 1024);
-  std::unique_ptr<Edit> rest_edit(rest ? new Edit(rest->pool_.get(), 1024) : nullptr);
+  std::optional<Edit> rest_edit;
+  if (rest) rest_edit.emplace(rest->pool_.get(), 1024);
   float from[kMaxClasses];
   for (auto it = evidence.begin_leafs(); it != evidence.end_leafs(); ++it) {
     if (!evidence.payload(&*it, from)) continue;

@@ -54,19 +54,22 @@ constexpr uint8_t kSparseTag = 2;  // + number of (class, value) pairs
 
 bool sameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
 
-// Every node's log-odds, depth first.
+// Every node in the file's order: depth first, child 0 first. Stops, returning false, when
+// visit(node) does.
 template <class Visit>
-void forEachNode(const EvidentialOcTree& tree, const EvidentialOcTreeNode* root, Visit visit) {
+bool forEachNode(const EvidentialOcTree& tree, const EvidentialOcTreeNode* root, Visit visit) {
   std::vector<const EvidentialOcTreeNode*> stack{root};
   while (!stack.empty()) {
     const EvidentialOcTreeNode* node = stack.back();
     stack.pop_back();
-    visit(node);
+    if (!visit(node)) return false;
     if (!tree.nodeHasChildren(node)) continue;
-    for (unsigned i = 0; i < 8; ++i) {
-      if (tree.nodeChildExists(node, i)) stack.push_back(tree.getNodeChild(node, i));
+    for (int i = 7; i >= 0; --i) {
+      const unsigned child = static_cast<unsigned>(i);
+      if (tree.nodeChildExists(node, child)) stack.push_back(tree.getNodeChild(node, child));
     }
   }
+  return true;
 }
 
 // Thrown inside readData only; turned into read_error_ there.
@@ -190,7 +193,12 @@ std::ostream& EvidentialOcTree::writeData(std::ostream& s) const {
   writeHeader(out);
   out.pod(static_cast<uint64_t>(tree_size));
   LogOddsTable table;
-  if (root) forEachNode(*this, root, [&](const EvidentialOcTreeNode* n) { table.add(n->getValue()); });
+  if (root) {
+    forEachNode(*this, root, [&table](const EvidentialOcTreeNode* node) {
+      table.add(node->getValue());
+      return true;
+    });
+  }
   table.finish();
   out.pod(static_cast<uint8_t>(table.width()));
   if (table.width() < 4) {
@@ -241,10 +249,7 @@ void EvidentialOcTree::writeHeader(SectionWriter& out) const {
 bool EvidentialOcTree::writeNodes(const EvidentialOcTreeNode* root_node, const LogOddsTable& table,
                                   SectionWriter& out) const {
   const float prior = rule_->prior();
-  std::vector<const EvidentialOcTreeNode*> stack{root_node};
-  while (!stack.empty()) {
-    const EvidentialOcTreeNode* node = stack.back();
-    stack.pop_back();
+  return forEachNode(*this, root_node, [&](const EvidentialOcTreeNode* node) {
     uint8_t children = 0;
     for (unsigned i = 0; i < 8; ++i) {
       if (nodeChildExists(node, i)) children |= static_cast<uint8_t>(1u << i);
@@ -257,11 +262,8 @@ bool EvidentialOcTree::writeNodes(const EvidentialOcTreeNode* root_node, const L
     }
     out.pod(children);
     if (children == 0) writePayload(node, prior, out);
-    for (int i = 7; i >= 0; --i) {
-      if (children & (1u << i)) stack.push_back(getNodeChild(node, static_cast<unsigned>(i)));
-    }
-  }
-  return true;
+    return true;
+  });
 }
 
 // A leaf's payload tag and payload, in the shorter form (format 3).

@@ -96,6 +96,10 @@ void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticC
   // Rows of their own for averaged cells, and for every point under an evidence floor.
   const bool floored = config.evidence_floor > 0.0;
   out->own.resize(average || floored ? m * num_classes : 0);
+  const float floor = static_cast<float>(config.evidence_floor);
+  auto applyFloor = [&](float* row) {
+    if (floored) std::replace_if(row, row + num_classes, [&](float e) { return e < floor; }, 0.0f);
+  };
   const size_t num_cells = runs.size() - 1;
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
   for (size_t r = 0; r < num_cells; ++r) {
@@ -109,6 +113,7 @@ void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticC
         if (floored) {
           float* row = &out->own[o * num_classes];
           std::copy_n(raw.evidence[c->second], num_classes, row);
+          applyFloor(row);
           out->evidence[o] = row;
         }
       }
@@ -130,11 +135,8 @@ void selectSemanticPoints(const RawPoints& raw, int num_classes, const SemanticC
     out->positions[o] = octomap::point3d(float(x / count), float(y / count), float(z / count));
     float* mean = &out->own[o * num_classes];
     for (int k = 0; k < num_classes; ++k) mean[k] = float(sums[k] / count);
+    applyFloor(mean);
     out->evidence[o] = mean;
-  }
-  if (config.evidence_floor > 0.0) {
-    const float floor = static_cast<float>(config.evidence_floor);
-    for (float& e : out->own) e = e < floor ? 0.0f : e;
   }
 }
 
