@@ -103,6 +103,15 @@ void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_n
   cmd->add_flag("!--no-calibration", o->calibrate,
                 "Derived evidence as is: no rescaling of u to the error rate of such points "
                 "on the mapping scans");
+  addCalibrationOption(cmd, &o->calibration);
+}
+
+void addCalibrationOption(CLI::App* cmd, std::string* calibration) {
+  cmd->add_option("--calibration", *calibration,
+                  "Network evidence (--evidence file): auto (fit scale and power without labels "
+                  "on the mapping scans' cross-scan agreement), none (as it is), or a file of "
+                  "'evidential_octomap calibrate'")
+      ->capture_default_str();
 }
 
 void finishEvidenceOptions(const std::string& source_name, const std::string& classes_path,

@@ -17,6 +17,7 @@ void addExportCommand(CLI::App& app);    // export_color.cpp
 void addMergeCommand(CLI::App& app);     // merge.cpp
 void addInfoCommand(CLI::App& app);      // info.cpp
 void addFeaturesCommand(CLI::App& app);  // features.cpp
+void addCalibrateCommand(CLI::App& app); // calibrate.cpp
 
 // --- shared option groups (defaults come from the structs, never restated) -----------------
 // --data (an existing path, described by data_help) and --classes (an existing class table YAML),
@@ -28,6 +29,8 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* config, double* resolution)
 // --evidence, -E, --knn-k, --knn-radius, --learned-model; the source name is parsed into
 // options->source, and an empty model path set to its default, by finishEvidenceOptions().
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* options, std::string* source_name);
+// --calibration of network evidence (EvidenceOptions::calibration).
+void addCalibrationOption(CLI::App* cmd, std::string* calibration);
 void finishEvidenceOptions(const std::string& source_name, const std::string& classes_path,
                            const ClassTable& classes, EvidenceOptions* options);
 

@@ -304,6 +304,7 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
     ev.source = evidenceSourceFromName(source_name);
     std::vector<std::vector<float>> evidence;
     try {
+      resolveInputCalibration(scans, protocol.map_scans, classes, o.resolution, &ev);
       evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
     } catch (const std::exception& e) {
       sec.notes.push_back("Evidence source " + source_name + " skipped: " + e.what() + ".");
@@ -549,6 +550,7 @@ void addCompareCommand(CLI::App& app) {
                   "<dataset>.model)");
   cmd->add_flag("!--no-calibration", o->evidence.calibrate,
                 "Derived evidence as is (no rescaling of u to the error rate of such points)");
+  addCalibrationOption(cmd, &o->evidence.calibration);
   cmd->add_option("--plan", o->plan,
                   "default: every variant with onehot, dempster and dempster-paper for "
                   "knn-vote and confusion, held-out dempster/sbki/ebs with onehot (~10 min); "

@@ -70,7 +70,8 @@ std::string describeEvidence(const EvidenceOptions& o) {
   s << evidenceSourceName(o.source);
   switch (o.source) {
     case EvidenceSource::kFile:
-      s << " (per-point " << (o.files.empty() ? "evidence files" : o.files) << " of the dataset)";
+      s << " (per-point " << (o.files.empty() ? "evidence files" : o.files) << " of the dataset; "
+        << o.input_calibration.describe() << ")";
       return s.str();
     case EvidenceSource::kOneHot:
       s << ", E=" << o.magnitude;
@@ -215,7 +216,11 @@ std::vector<float> deriveEvidence(const Scan& scan, size_t scan_index,
         throw std::runtime_error("evidence source 'file' needs evidence/ or alpha/ files, scan " +
                                  scan.name + " has none");
       }
-      return scan.evidence;
+      {
+        std::vector<float> e = scan.evidence;
+        options.input_calibration.apply(e.data(), scan.size(), num_classes);
+        return e;
+      }
     case EvidenceSource::kOneHot:
       requirePredictions(scan, "onehot");
       return oneHotEvidence(scan.predicted, num_classes, options.magnitude);

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   t::addMergeCommand(app);
   t::addInfoCommand(app);
   t::addFeaturesCommand(app);
+  t::addCalibrateCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
