@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -156,6 +155,8 @@ def map_bag(bag, classes, options: MapOptions = MapOptions(), model: Optional[Ca
     path = Path(bag)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such bag (a ROS 1 .bag file or a ROS 2 bag directory)")
+    if path.is_file() and path.suffix != ".bag":
+        raise ValueError(f"{path}: a ROS 1 bag must be named *.bag (a ROS 2 bag is a directory)")
     C = classes.num_classes
     tree = _core.EvidentialOcTree(options.resolution, classes,
                                   _core.SemanticConfig(**options.config))
@@ -290,10 +291,10 @@ def summary_markdown(s: dict) -> str:
              f"- {s['format']}, topic `{s['topic']}`, map frame `{s['frame']}`",
              f"- clouds: {s['clouds']}, mapped: {s['scans_mapped']}, dropped: {len(s['dropped'])}",
              f"- points mapped: {s['points_mapped']:,} ({s['points_nonfinite']:,} NaN/inf dropped)",
-             f"- evidence: " + "; ".join(f"{k} ({v} clouds)" for k, v in
+             "- evidence: " + "; ".join(f"{k} ({v} clouds)" for k, v in
                                           s["evidence_sources"].items()),
-             f"- time: {s['seconds']['total']:.2f} s, {s['scans_per_s']:.2f} scans/s (read "
-             + ", ".join(f"{k} {v:.2f} s" for k, v in s["seconds"].items() if k != "total")[5:]
+             f"- time: {s['seconds']['total']:.2f} s, {s['scans_per_s']:.2f} scans/s ("
+             + ", ".join(f"{k} {v:.2f} s" for k, v in s["seconds"].items() if k != "total")
              + ")",
              f"- map: {s['map']['leaves']:,} leaves, {s['map']['semantic_nodes']:,} with evidence, "
              f"{s['map']['memory_bytes'] / 1e6:.0f} MB, resolution {s['map']['resolution']} m, "
@@ -456,6 +457,8 @@ def write_bag(data_dir, out, classes, options: WriteOptions = WriteOptions(),
     out = Path(out)
     if out.exists():
         raise FileExistsError(f"{out} exists; the bag writer does not overwrite")
+    if not options.ros2 and out.suffix != ".bag":
+        raise ValueError(f"{out}: a ROS 1 bag must be named *.bag (as ROS tools expect)")
     dataset = _core.Dataset.open(str(data_dir), classes)
     n = len(dataset) if options.scans is None else min(options.scans, len(dataset))
     learned = None
