@@ -118,6 +118,16 @@ def read_tf(reader) -> TfBuffer:
     return tf
 
 
+def read_evidence_source(reader) -> Optional[str]:
+    """The bag's /evidence_source (std_msgs/String, as `write` and the ROS player record it)."""
+    conns = [c for c in reader.connections
+             if c.topic == "/evidence_source" and c.msgtype == "std_msgs/msg/String"]
+    text = None
+    for conn, _, raw in reader.messages(connections=conns):
+        text = reader.deserialize(raw, conn.msgtype).data
+    return text
+
+
 def cloud_topics(reader) -> Dict[str, int]:
     return {c.topic: c.msgcount for c in reader.connections if c.msgtype == POINTCLOUD2}
 
@@ -180,6 +190,7 @@ def map_bag(bag, classes, options: MapOptions = MapOptions(), model: Optional[Ca
         t0 = time.monotonic()
         tf = read_tf(reader)
         seconds["tf"] += time.monotonic() - t0
+        declared = read_evidence_source(reader)
         total = topics[topic] if options.max_clouds is None else min(topics[topic],
                                                                     options.max_clouds)
         bar = _Progress(total, progress)
@@ -276,6 +287,7 @@ def map_bag(bag, classes, options: MapOptions = MapOptions(), model: Optional[Ca
         "points_nonfinite": nonfinite,
         "dropped": dropped,
         "evidence_sources": sources,
+        "evidence_declared": declared,  # the bag's /evidence_source (how the evidence was made)
         "tf": {"frames": tf.frames, "first_ns": first, "last_ns": last},
         "seconds": {"total": wall, **seconds},
         "scans_per_s": mapped / wall if wall > 0 else 0.0,
@@ -292,7 +304,8 @@ def summary_markdown(s: dict) -> str:
              f"- clouds: {s['clouds']}, mapped: {s['scans_mapped']}, dropped: {len(s['dropped'])}",
              f"- points mapped: {s['points_mapped']:,} ({s['points_nonfinite']:,} NaN/inf dropped)",
              "- evidence: " + "; ".join(f"{k} ({v} clouds)" for k, v in
-                                          s["evidence_sources"].items()),
+                                          s["evidence_sources"].items())
+             + (f"; the bag says: {s['evidence_declared']}" if s.get("evidence_declared") else ""),
              f"- time: {s['seconds']['total']:.2f} s, {s['scans_per_s']:.2f} scans/s ("
              + ", ".join(f"{k} {v:.2f} s" for k, v in s["seconds"].items() if k != "total")
              + ")",
@@ -319,8 +332,8 @@ def write_outputs(result: BagMap, classes, out, render: bool = True) -> List[str
         if hasattr(_core, "render_top_down"):
             caption = [f"{s['format']} {s['topic']} | {s['scans_mapped']} scans | rule "
                        f"{s['map']['rule']}",
-                       "evidence: " + "; ".join(s["evidence_sources"]) if s["evidence_sources"]
-                       else "evidence: none"]
+                       "evidence: " + ("; ".join(s["evidence_sources"]) or "none")
+                       + (f" | {s['evidence_declared']}" if s.get("evidence_declared") else "")]
             for mode in ("semantic", "uncertainty"):
                 _core.render_top_down(result.tree, classes, str(out / f"{mode}.png"), mode,
                                       [f"{mode} | " + caption[0], caption[1]])
@@ -646,8 +659,12 @@ def run_map(args) -> int:
         if view is not None and args.foxglove and args.keep_serving:
             print("foxglove: serving the final map" + (" until Ctrl-C" if args.keep_serving < 0
                   else f" for {args.keep_serving:g} s"), file=sys.stderr)
+            view.close_mcap()  # the MCAP holds the mapping run; serving goes on alone
+            end = time.monotonic() + (float("inf") if args.keep_serving < 0 else args.keep_serving)
             try:
-                time.sleep(1e9 if args.keep_serving < 0 else args.keep_serving)
+                while time.monotonic() < end:  # re-published so that late clients see the map
+                    time.sleep(max(0.0, min(max(args.view_period, 1.0), end - time.monotonic())))
+                    view.publish(result.tree)
             except KeyboardInterrupt:
                 pass
     finally:

@@ -254,10 +254,13 @@ class FoxgloveView:
                     for i, n in enumerate(("x", "y", "z", "label"))],
             data=data.tobytes()), log_time=int(stamp_ns) or None)
 
+    def close_mcap(self):
+        if self.mcap is not None:
+            self.mcap.close()
+            self.mcap = None
+
     def close(self):
         if self.server is not None:
             self.server.stop()
             self.server = None
-        if self.mcap is not None:
-            self.mcap.close()
-            self.mcap = None
+        self.close_mcap()

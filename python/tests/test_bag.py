@@ -78,6 +78,7 @@ def test_a_bag_maps_to_the_map_the_python_api_makes_from_the_dataset(name, mappe
     tree, summary, _, _ = mapped[name]
     assert summary["scans_mapped"] == SCANS and summary["clouds"] == SCANS + 1
     assert summary["evidence_sources"] == {"evidence[20]": SCANS}
+    assert summary["evidence_declared"].startswith("derived: onehot evidence of magnitude 20")
     assert_same_map(compare_leaves(direct.leaves(), tree.leaves()))
 
 
