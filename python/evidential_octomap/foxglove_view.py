@@ -20,12 +20,14 @@ Topics (Foxglove schemas, protobuf):
 The cubes are encoded straight from the numpy arrays of ``tree.leaves`` (one vectorised protobuf
 writer, identical bytes to the SDK's own SceneUpdate for the same cubes: see the tests), since
 building one Python object per voxel would cost about 7 us a voxel. The map views are published
-at most every ``period`` seconds of wall time and at the end, so a large map does not slow mapping
-down; the cloud and the pose go out with every cloud. ``max_voxels`` bounds a publication (the
+at most every ``period`` seconds of wall time and at the end, and only on the topics someone
+receives (a subscribed client or the MCAP), so a large map does not slow mapping down and nothing
+is computed while nobody watches; the cloud and the pose go out with every cloud. ``max_voxels`` bounds a publication (the
 voxels nearest the sensor are kept, and the entity's metadata says how many were left out).
 """
 from __future__ import annotations
 
+import threading
 import time
 from typing import Optional
 
@@ -171,7 +173,15 @@ class FoxgloveView:
         self._stamp = 0
         self.published = 0          # map publications
         self.last_voxels = 0        # cubes in the last one
-        self.seconds = 0.0          # time spent publishing
+        self.seconds = 0.0          # time the caller spent here (what slows mapping down)
+        # Encoding and sending run on a worker thread, beside the next insert (which releases
+        # the GIL); the newest job of each kind waits, an older one not yet started is replaced.
+        self._pending = {}
+        self._busy = False
+        self._closing = False
+        self._cv = threading.Condition()
+        self._worker = threading.Thread(target=self._run, name="foxglove-view", daemon=True)
+        self._worker.start()
 
     @property
     def port(self) -> Optional[int]:
@@ -183,17 +193,26 @@ class FoxgloveView:
         passed since the last map publication."""
         t0 = time.monotonic()
         self._stamp, self._origin = int(stamp_ns), np.asarray(pose)[:3, 3].copy()
-        self._publish_pose(pose, stamp_ns, sensor_frame)
-        self._publish_cloud(points_S, pose, stamp_ns, evidence)
+        if self._tf.has_sinks() or self._cloud.has_sinks():
+            self._submit("cloud", (np.asarray(points_S), np.array(pose, dtype=np.float64),
+                                   int(stamp_ns), sensor_frame, evidence))
         self.seconds += time.monotonic() - t0
         if time.monotonic() - self._last >= self.period:
             self.publish(tree, stamp_ns)
 
     def finish(self, tree):
+        """The final map, sent before this returns."""
         self.publish(tree, self._stamp)
+        self.flush()
 
     def publish(self, tree, stamp_ns: Optional[int] = None) -> int:
-        """Every view of the map now; returns the number of cubes in each."""
+        """The map now, on every view someone receives (a subscribed client, the MCAP); returns
+        the number of cubes in each (0: nobody receives any view, nothing was done). The leaves
+        are read here (the tree must not change meanwhile); encoding and sending run on the
+        worker (``flush()`` waits for it)."""
+        channels = {v: c for v, c in self._voxels.items() if c.has_sinks()}
+        if not channels:
+            return 0
         t0 = time.monotonic()
         stamp = self._stamp if stamp_ns is None else int(stamp_ns)
         leaves = tree.leaves(occupied_only=True)
@@ -202,24 +221,64 @@ class FoxgloveView:
         if n > self.max_voxels:  # the nearest to the sensor
             d = np.linalg.norm(leaves.centers - self._origin, axis=1)
             keep = np.argpartition(d, self.max_voxels)[: self.max_voxels]
+        count = n if keep is None else len(keep)
+        meta = {"voxels": count, "occupied_leaves": n, "left_out": n - count,
+                "resolution": tree.resolution, "rule": tree.rule}
+        self._submit("map", (leaves, keep, channels, stamp, meta))
+        self._last = time.monotonic()
+        self.published += 1
+        self.last_voxels = count
+        self.seconds += time.monotonic() - t0
+        return count
+
+    def flush(self):
+        """Waits until every submitted view has been sent."""
+        with self._cv:
+            while self._pending or self._busy:
+                self._cv.wait()
+
+    # --- worker
+    def _submit(self, kind, job):
+        with self._cv:
+            self._pending[kind] = job
+            self._cv.notify_all()
+
+    def _run(self):
+        while True:
+            with self._cv:
+                while not self._pending and not self._closing:
+                    self._cv.wait()
+                if not self._pending:
+                    return
+                kind = "map" if "map" in self._pending else next(iter(self._pending))
+                job = self._pending.pop(kind)
+                self._busy = True
+            try:
+                if kind == "map":
+                    self._send_map(*job)
+                else:
+                    points_S, pose, stamp, sensor_frame, evidence = job
+                    if self._tf.has_sinks():
+                        self._publish_pose(pose, stamp, sensor_frame)
+                    if self._cloud.has_sinks():
+                        self._publish_cloud(points_S, pose, stamp, evidence)
+            finally:
+                with self._cv:
+                    self._busy = False
+                    self._cv.notify_all()
+
+    def _send_map(self, leaves, keep, channels, stamp, meta):
         centers = leaves.centers.astype(np.float64)
         sizes = leaves.sizes.astype(np.float64)
         if keep is not None:
             centers, sizes = centers[keep], sizes[keep]
-        meta = {"voxels": len(sizes), "occupied_leaves": n, "left_out": n - len(sizes),
-                "resolution": tree.resolution, "rule": tree.rule}
-        for view, channel in self._voxels.items():
+        for view, channel in channels.items():
             rgba = voxel_colors(leaves, self.classes, view)
             if keep is not None:
                 rgba = rgba[keep]
             data = encode_scene_update(self.frame, "voxels", stamp,
                                        encode_cubes(centers, sizes, rgba), {**meta, "view": view})
             channel.log(data, log_time=stamp or None)
-        self._last = time.monotonic()
-        self.published += 1
-        self.last_voxels = len(sizes)
-        self.seconds += time.monotonic() - t0
-        return len(sizes)
 
     def _publish_pose(self, pose, stamp_ns, sensor_frame):
         from .tf_buffer import quaternion
@@ -255,11 +314,17 @@ class FoxgloveView:
             data=data.tobytes()), log_time=int(stamp_ns) or None)
 
     def close_mcap(self):
+        self.flush()
         if self.mcap is not None:
             self.mcap.close()
             self.mcap = None
 
     def close(self):
+        self.flush()
+        with self._cv:
+            self._closing = True
+            self._cv.notify_all()
+        self._worker.join()
         if self.server is not None:
             self.server.stop()
             self.server = None

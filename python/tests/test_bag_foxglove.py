@@ -103,6 +103,7 @@ async def receive_scene(view, tree, topic):
             if msg["op"] == "advertise":
                 channels.update({c["topic"]: c for c in msg["channels"]})
         assert channels[topic]["schemaName"] == "foxglove.SceneUpdate"
+        assert view.publish(tree) == 0  # nobody subscribed: nothing computed, nothing sent
         await ws.send(json.dumps({"op": "subscribe",
                                   "subscriptions": [{"id": 7, "channelId": channels[topic]["id"]}]}))
         await asyncio.sleep(0.3)  # the server registers the subscription
