@@ -149,3 +149,53 @@ def test_a_bag_mapped_with_the_view_writes_the_views_to_an_mcap(tmp_path, wall_m
                   b"/map/cloud", b"/tf"):
         assert topic in data
     assert view.last_voxels == len(tree.leaves(occupied_only=True).sizes)
+
+
+def test_the_command_line_serves_the_map_it_builds_to_a_foxglove_client(tmp_path):
+    """`bag map --foxglove` on a ROS 2 MCAP bag written by `bag write`: a client connecting
+    while the command runs receives the map.ot's occupied voxels as cubes."""
+    import subprocess
+    import sys
+    from conftest import KITTI, REPO
+    from evidential_octomap import bag
+    classes_path = REPO / "config" / "classes_semantickitti.yaml"
+    classes = eo.ClassTable.load(str(classes_path))
+    bag.write_bag(KITTI, tmp_path / "one", classes, bag.WriteOptions(scans=1))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "evidential_octomap.bag", "map", str(tmp_path / "one"),
+         "--classes", str(classes_path), "--out", str(tmp_path / "out"), "--topic",
+         "/velodyne_points/evidence", "--no-render", "-q", "--foxglove", "--port", "0",
+         "--keep-serving", "30", "--view-period", "1"],
+        stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        line = proc.stderr.readline()
+        assert line.startswith("foxglove: open ws://127.0.0.1:"), line
+        port = int(line.split("ws://127.0.0.1:")[1].split()[0])
+
+        async def first_scene():
+            async with websockets.connect(f"ws://127.0.0.1:{port}", max_size=None,
+                                          subprotocols=["foxglove.sdk.v1"]) as ws:
+                channels = {}
+                while "/map/voxels/class" not in channels:
+                    msg = json.loads(await asyncio.wait_for(ws.recv(), 20))
+                    if msg["op"] == "advertise":
+                        channels.update({c["topic"]: c["id"] for c in msg["channels"]})
+                await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                    {"id": 3, "channelId": channels["/map/voxels/class"]}]}))
+                while True:
+                    data = await asyncio.wait_for(ws.recv(), 20)
+                    if isinstance(data, bytes) and data[0] == 1:
+                        return data[13:]
+
+        cubes = cubes_of(asyncio.run(first_scene()))
+        # The served map is the one written, once the command has written it.
+        for _ in range(100):
+            if (tmp_path / "out" / "summary.json").is_file():
+                break
+            asyncio.run(asyncio.sleep(0.1))
+        tree = eo.load(tmp_path / "out" / "map.ot")
+        # One scan: every publication (after it, at the end, while serving) is the whole map.
+        assert len(cubes) == len(tree.leaves(occupied_only=True).sizes) > 0
+    finally:
+        proc.terminate()
+        proc.wait(10)
