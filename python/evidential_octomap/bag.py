@@ -198,9 +198,9 @@ def map_bag(bag, classes, options: MapOptions = MapOptions(), model: Optional[Ca
         index = -1
         t0 = time.monotonic()
         for conn, _, raw in reader.messages(connections=conns):
-            index += 1
-            if options.max_clouds is not None and index >= options.max_clouds:
+            if options.max_clouds is not None and index + 1 >= options.max_clouds:
                 break
+            index += 1
             msg = reader.deserialize(raw, conn.msgtype)
             t1 = time.monotonic()
             seconds["read"] += t1 - t0
@@ -580,8 +580,9 @@ def _add_map_arguments(p):
     p.add_argument("--foxglove", action="store_true",
                    help="serve the map live to Foxglove (WebSocket on 127.0.0.1)")
     p.add_argument("--port", type=int, default=8765, help="Foxglove WebSocket port (default 8765)")
-    p.add_argument("--color", default="class", choices=("class", "uncertainty", "conflict"),
-                   help="initial colouring of the Foxglove voxels (all three are published)")
+    p.add_argument("--views", default="class,uncertainty,conflict",
+                   help="voxel views to publish, of class, uncertainty, conflict (default all; "
+                   "each is a topic /map/voxels/<view> to choose in Foxglove)")
     p.add_argument("--mcap-views", default=None, metavar="FILE",
                    help="also write the Foxglove views to this MCAP for later viewing")
     p.add_argument("--view-period", type=float, default=2.0,
@@ -643,7 +644,8 @@ def run_map(args) -> int:
     if args.foxglove or args.mcap_views:
         from .foxglove_view import FoxgloveView
         view = FoxgloveView(classes, frame=args.frame, serve=args.foxglove, port=args.port,
-                            mcap=args.mcap_views, period=args.view_period, color=args.color)
+                            mcap=args.mcap_views, period=args.view_period,
+                            views=tuple(v.strip() for v in args.views.split(",") if v.strip()))
         if args.foxglove:
             print(f"foxglove: open ws://127.0.0.1:{view.port} in Foxglove (Open connection -> "
                   "Foxglove WebSocket)", file=sys.stderr)

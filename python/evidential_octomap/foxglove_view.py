@@ -146,13 +146,14 @@ class FoxgloveView:
 
     def __init__(self, classes, frame: str = "map", serve: bool = True, host: str = "127.0.0.1",
                  port: int = 8765, mcap: Optional[str] = None, period: float = 2.0,
-                 color: str = "class", max_voxels: int = 1_000_000):
+                 views=VIEWS, max_voxels: int = 1_000_000):
         import foxglove
         from foxglove import messages
-        if color not in VIEWS:
-            raise ValueError(f"color must be one of {', '.join(VIEWS)}, got '{color}'")
+        unknown = [v for v in views if v not in VIEWS]
+        if unknown or not views:
+            raise ValueError(f"views must be some of {', '.join(VIEWS)}, got {list(views)}")
         self.classes, self.frame, self.period, self.max_voxels = classes, frame, period, max_voxels
-        self.views = (color,) + tuple(v for v in VIEWS if v != color)
+        self.views = tuple(views)
         self._m = messages
         self.context = foxglove.Context()
         schema = messages.SceneUpdate.get_schema()
