@@ -284,7 +284,12 @@ def _labels_to_evidence(values, index, C, magnitude, raw_label_table) -> np.ndar
         try:
             labels = np.asarray(raw_label_table.classes_of_raw(labels.astype(np.uint32)),
                                 dtype=np.int64)
-        except (IndexError, ValueError, RuntimeError) as e:
+        except (IndexError, ValueError, RuntimeError) as e:  # name the first such point
+            for i, raw in enumerate(labels.astype(np.uint32)):
+                try:
+                    raw_label_table.classes_of_raw(np.array([raw], dtype=np.uint32))
+                except (IndexError, ValueError, RuntimeError) as first:
+                    raise CloudError(f"point {int(index[i])}: {first}") from None
             raise CloudError(str(e)) from None
     if (labels >= C).any():
         i = int(np.argmax(labels >= C))

@@ -87,6 +87,9 @@ def test_a_label_field_gives_one_hot_evidence_and_raw_ids_go_through_the_learnin
     raw = np.array([40, 10, 70], dtype=np.uint32)  # road, car, vegetation
     got = pc2.decode(cloud(xyz_columns() + [("label", "u4", raw)]), 20, raw_label_table=kitti)
     np.testing.assert_array_equal(got.evidence.argmax(1), kitti.classes_of_raw(raw))
+    unknown = np.array([40, 10, 12345], dtype=np.uint32)
+    with pytest.raises(CloudError, match=r"^point 2: .*12345"):
+        pc2.decode(cloud(xyz_columns() + [("label", "u4", unknown)]), 20, raw_label_table=kitti)
 
 
 def test_evidence_wins_over_label_in_auto_and_an_explicit_input_is_obeyed():
