@@ -272,7 +272,8 @@ py_stamp="${py_venv}/.installed-sources"
 python_sources_hash() {
   find pyproject.toml CMakeLists.txt cmake python/src python/evidential_octomap include src/core \
     src/tools/dataset.cpp src/tools/dataset.h src/tools/evidence_sources.cpp \
-    src/tools/evidence_sources.h config -type f ! -name '*.pyc' -print0 |
+    src/tools/evidence_sources.h src/tools/render.cpp src/tools/render.h config -type f \
+    ! -name '*.pyc' -print0 |
     sort -z | xargs -0 sha1sum | sha1sum | cut -d' ' -f1
 }
 
@@ -287,7 +288,8 @@ python_install() {
   rm -f "${py_stamp}"
   # The build backend is installed once so that re-installs reuse build/python (incremental).
   "${py_venv}/bin/pip" install -q "scikit-build-core>=0.10" "nanobind>=2.4" || return 1
-  "${py_venv}/bin/pip" install -q --no-build-isolation ".[test]" || return 1
+  # bags: rosbags and foxglove-sdk for python/tests/test_bag*.py (ROS 1/2 bags, Foxglove view).
+  "${py_venv}/bin/pip" install -q --no-build-isolation ".[test,bags]" || return 1
   echo "${hash}" >"${py_stamp}"
 }
 

@@ -11,6 +11,8 @@ into an OctoMap whose voxels carry Dempster-Shafer belief masses and an uncertai
     tree.save("map.ot")
 
 Batch mapping of long sequences on Dask: ``python -m evidential_octomap.batch --help``.
+ROS 1 / ROS 2 bags and a live Foxglove view, no ROS needed: ``python -m evidential_octomap.bag
+--help`` (``pip install ".[bags]"``).
 """
 from pathlib import Path
 
@@ -20,6 +22,7 @@ from ._core import (
     Dataset,
     EvidentialOcTree,
     InsertStats,
+    LearnedEvidenceModel,
     Leaves,
     ErrorDetection,
     MapMetrics,
@@ -28,6 +31,8 @@ from ._core import (
     Scan,
     SemanticConfig,
     derive_evidence,
+    evidence_from_logits,
+    evidence_from_probabilities,
     evaluate_map,
     evaluate_input,
     evidence_is_derived,
@@ -39,6 +44,7 @@ __all__ = [
     "Dataset",
     "EvidentialOcTree",
     "InsertStats",
+    "LearnedEvidenceModel",
     "Leaves",
     "ErrorDetection",
     "MapMetrics",
@@ -48,11 +54,19 @@ __all__ = [
     "SemanticConfig",
     "bundled_class_table",
     "derive_evidence",
+    "evidence_from_logits",
+    "evidence_from_probabilities",
     "evaluate_map",
     "evaluate_input",
     "evidence_is_derived",
     "load",
 ]
+
+try:  # built when OpenCV was found (the CLI's top-down pictures)
+    from ._core import render_top_down  # noqa: F401
+    __all__.append("render_top_down")
+except ImportError:
+    pass
 
 _CONFIG_DIR = Path(__file__).resolve().parent / "config"
 

@@ -60,6 +60,10 @@ void bindDataset(nb::module_& m) {
             return toNumpy(std::move(xyz), {s.size(), 3});
           },
           kShared, "(N, 3) float32, sensor frame.")
+      .def_prop_ro(
+          "remission",
+          [](const Scan& s) { return toNumpy(std::vector<float>(s.remission), {s.remission.size()}); },
+          kShared, "(N,) float32 the .bin's fourth column (intensity).")
       .def(
           "points_world", [](const Scan& s) { return cloudArray(s.pointsW()); },
           "(N, 3) float32 in the map frame, transformed exactly as the CLI does.")

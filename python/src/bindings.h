@@ -47,5 +47,9 @@ void bindConfig(nb::module_& m);
 void bindTree(nb::module_& m);
 void bindDataset(nb::module_& m);
 void bindMetrics(nb::module_& m);
+void bindConversions(nb::module_& m);
+#ifdef EVIDENTIAL_OCTOMAP_PYTHON_RENDER
+void bindRender(nb::module_& m);
+#endif
 
 }  // namespace evidential_octomap::python

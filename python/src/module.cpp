@@ -46,4 +46,8 @@ NB_MODULE(_core, m) {
   bindTree(m);
   bindDataset(m);
   bindMetrics(m);
+  bindConversions(m);
+#ifdef EVIDENTIAL_OCTOMAP_PYTHON_RENDER
+  bindRender(m);
+#endif
 }
