@@ -119,6 +119,11 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // re-interprets stored payloads, so it is refused (std::logic_error) while the map holds any.
   void setConfig(const SemanticConfig& config);
   const FusionRule& rule() const { return *rule_; }
+  // Mean over the points inserted so far of sum_c log1p(e^c / C), the statistic the adaptive
+  // cap follows (SemanticConfig::adaptive_cap); 0 before the first insert or after reading.
+  double meanPointLogEvidence() const {
+    return evidence_points_ ? evidence_log_sum_ / double(evidence_points_) : 0.0;
+  }
   // OctoMap's occupancy model, set as one checked value (std::invalid_argument outside
   // SensorModel's ranges). OctoMap's own setProbHit & co. stay available but unchecked: a tree
   // set outside the ranges through them is refused by writeData and saveMap.
@@ -299,6 +304,10 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   std::string read_error_;
   bool created_for_read_ = false;               // made by create(), readData not called yet
   std::unique_ptr<ScanIntegrator> integrator_;  // created on first insert; keeps scratch buffers
+  // The adaptive cap's statistic over every point handed to insertSemanticScan.
+  double evidence_log_sum_ = 0.0;
+  size_t evidence_points_ = 0;
+  void followEvidence(const std::vector<float>& evidence);
 
   // Registers the tree type with AbstractOcTree (the ColorOcTree pattern).
   class StaticMemberInitializer {

@@ -76,6 +76,8 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
       class_names_(rhs.class_names_),
       config_(rhs.config_),
       rule_(FusionRule::create(rhs.config_)),
+      evidence_log_sum_(rhs.evidence_log_sum_),
+      evidence_points_(rhs.evidence_points_),
       pool_(std::make_unique<PayloadStore>(rhs.num_classes_, rhs.rule_->prior())) {
   // OctoMap's own copy constructor slices derived nodes, so the nodes are copied here.
   clamping_thres_min = rhs.clamping_thres_min;
@@ -155,7 +157,27 @@ InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& poin
                                                  EvidentialOcTree* unobserved) {
   if (unobserved) checkCompatible(*unobserved, "unobserved evidence");
   if (!integrator_) integrator_ = std::make_unique<ScanIntegrator>(config_);
-  return integrator_->integrate(points_W, evidence, origin_W, this, unobserved);
+  const InsertStats stats = integrator_->integrate(points_W, evidence, origin_W, this, unobserved);
+  followEvidence(evidence);
+  return stats;
+}
+
+void EvidentialOcTree::followEvidence(const std::vector<float>& evidence) {
+  if (!config_.adaptive_cap || config_.rule != "dempster") return;
+  // Every 4th point is plenty for a mean over a scan and keeps this off the insert's cost.
+  const size_t C = static_cast<size_t>(num_classes_), n = evidence.size() / C;
+  for (size_t i = 0; i < n; i += 4) {
+    const float* e = evidence.data() + i * C;
+    double sum = 0.0;
+    for (size_t c = 0; c < C; ++c) {
+      if (e[c] > 0.0f) sum += std::log1p(double(e[c]) / double(C));
+    }
+    if (sum > 0.0) evidence_log_sum_ += sum, ++evidence_points_;
+  }
+  const double cap = SemanticConfig::adaptiveEvidenceCap(meanPointLogEvidence());
+  if (evidence_points_ == 0 || cap == config_.evidence_cap) return;
+  config_.evidence_cap = cap;
+  rule_ = FusionRule::create(config_);  // only the read-out changes
 }
 
 InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& points_S,
@@ -569,6 +591,8 @@ void EvidentialOcTree::prune() {
 void EvidentialOcTree::clear() {
   OccupancyOcTreeBase<EvidentialOcTreeNode>::clear();
   if (pool_) pool_->reset(num_classes_, pool_->prior());
+  evidence_log_sum_ = 0.0;
+  evidence_points_ = 0;
 }
 
 size_t EvidentialOcTree::memoryUsage() const {

@@ -378,6 +378,7 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
   float occupancy[5];
   for (float& v : occupancy) v = in.pod<float>("occupancy parameters");
   config.evidence_cap = version >= kFormatEvidenceCap ? in.pod<double>("evidence cap") : 0.0;
+  config.adaptive_cap = false;  // a read map keeps the cap it was saved with
   const std::string problem = storedParameterProblem(resolution, occupancy, config);
   if (!problem.empty()) throw FormatError("bad parameters: " + problem);
   setConfig(config);

@@ -88,6 +88,7 @@ void SemanticConfig::print(std::ostream& out) const {
       << "reference_compat: " << (reference_compat ? "true" : "false") << "\n"
       << "sbki_prior: " << sbki_prior << "\n"
       << "evidence_cap: " << evidence_cap << "\n"
+      << "adaptive_cap: " << (adaptive_cap ? "true" : "false") << "\n"
       << "downsampling: " << downsampling
       << (effectiveDownsampling() != downsampling ? " (count_cap used)" : "") << "\n"
       << "ds_multiplier: " << ds_multiplier << "\n"
@@ -99,6 +100,12 @@ void SemanticConfig::print(std::ostream& out) const {
       << "semantic_occupied_only: " << (semantic_occupied_only ? "true" : "false") << "\n"
       << "evidence_floor: " << evidence_floor << "\n"
       << "threads: " << threads << "\n";
+}
+
+double SemanticConfig::adaptiveEvidenceCap(double mean_point_log_evidence) {
+  if (!(mean_point_log_evidence > 0.0)) return kMinAdaptiveCap;
+  const double cap = kAdaptiveCapScale * std::pow(mean_point_log_evidence, kAdaptiveCapExponent);
+  return std::clamp(cap, kMinAdaptiveCap, kMaxAdaptiveCap);
 }
 
 }  // namespace evidential_octomap

@@ -1,15 +1,21 @@
-// `evidential_octomap calibrate`: fit the network-evidence calibration (scale and power, see
-// evidential_octomap/input_calibration.h) on labelled scans of a user's own (a validation split),
-// or without labels on cross-scan agreement, and write it as a small YAML file that `map`,
-// `compare`, the node (~calibration) and Python (InputCalibration.load) read.
+// `evidential_octomap calibrate`: fit the read-out cap of a dempster map (SemanticConfig::
+// evidence_cap) on labelled scans of a user's own network (a validation split). The scans are
+// mapped once as `map` maps them; the cap that minimises the Brier score of the map on their GT
+// points (golden-section search over ln cap) is written as a parameter file that the node loads
+// (rosparam: `evidence_cap`, `adaptive_cap: false`), and printed for `map --evidence-cap` and
+// Python's SemanticConfig(evidence_cap=...). Without it the cap follows the evidence
+// (SemanticConfig::adaptive_cap), with constants chosen across datasets.
+#include <cmath>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
-#include "calibration_fit.h"
 #include "commands.h"
-#include "consensus_labels.h"
 #include "dataset.h"
+#include "evidential_octomap/io.h"
+#include "evidential_octomap/metrics.h"
 #include "pipeline.h"
 
 namespace evidential_octomap::tools {
@@ -18,48 +24,67 @@ namespace {
 
 struct CalibrateOptions {
   std::string data, classes, out = "calibration.yaml";
-  std::string labels = "gt";
   size_t scans = 0;
+  SemanticConfig config;
   double resolution = 0.2;
-  InputConversion conversion;
-  std::string logit_transform_name = "softmax";
+  EvidenceOptions evidence;
+  std::string evidence_name = "file";
+  bool quiet = false;
 };
+
+// Brier score of the map read with a fixed cap (only the read-out changes).
+double brierWithCap(EvidentialOcTree* tree, const std::vector<Query>& queries, int ignore_class,
+                    double cap) {
+  SemanticConfig c = tree->config();
+  c.evidence_cap = cap;
+  c.adaptive_cap = false;
+  tree->setConfig(c);
+  return evaluateMap(*tree, queries, ignore_class).quality.brier;
+}
 
 void runCalibrate(const CalibrateOptions& o) {
   const ClassTable classes = ClassTable::load(o.classes);
-  InputConversion conversion = o.conversion;
-  conversion.logit_transform = logitTransformFromName(o.logit_transform_name);
-  const Dataset dataset = Dataset::open(o.data, classes, conversion);
-  if (!dataset.hasEvidence()) {
-    throw std::runtime_error(o.data + ": no evidence/, alpha/, logits/ or probabilities/ files: "
-                             "calibrate fits a network's outputs");
+  EvidenceOptions ev = o.evidence;
+  finishEvidenceOptions(o.evidence_name, o.classes, classes, &ev);
+  const Dataset dataset = Dataset::open(o.data, classes, ev.conversion);
+  if (!dataset.hasLabels()) throw std::runtime_error(o.data + ": calibrate needs labels/ (GT)");
+  if (o.config.rule != "dempster") throw std::runtime_error("calibrate fits the dempster cap");
+  const std::vector<Scan> scans = loadScans(dataset, o.scans, !o.quiet);
+  const Protocol protocol = makeProtocol("reconstruction", scans.size());
+  const auto evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes, {});
+  MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,
+                          !o.quiet, "mapping");
+  const std::vector<Query> queries =
+      buildQueries(scans, protocol.query_scans, classes.ignore_class, nullptr, nullptr);
+  const double adaptive = run.tree->config().evidence_cap;
+  const auto brier = [&](double log_cap) {
+    return brierWithCap(run.tree.get(), queries, classes.ignore_class, std::exp(log_cap));
+  };
+  // Golden-section search on ln cap in [ln 0.5, ln 100] (the Brier score is unimodal in it).
+  const double r = (std::sqrt(5.0) - 1.0) / 2.0;
+  double a = std::log(0.5), b = std::log(100.0), x1 = b - r * (b - a), x2 = a + r * (b - a);
+  double f1 = brier(x1), f2 = brier(x2);
+  for (int i = 0; i < 14; ++i) {
+    if (f1 < f2) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - r * (b - a), f1 = brier(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + r * (b - a), f2 = brier(x2);
+    }
   }
-  if (o.labels == "gt" && !dataset.hasLabels()) {
-    throw std::runtime_error(o.data + ": no labels/ to calibrate on; use --labels consensus "
-                             "(no labels needed)");
-  }
-  const std::vector<Scan> scans = loadScans(dataset, o.scans, true);
-  std::vector<size_t> all(scans.size());
-  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
-  std::vector<std::vector<float>> evidence(scans.size());
-  std::vector<std::vector<int>> labels(scans.size());
-  for (size_t s : all) {
-    evidence[s] = scans[s].evidence;
-    if (o.labels == "gt") labels[s] = scans[s].gt;
-  }
-  if (o.labels == "consensus") {
-    labels = consensusLabels(scans, all, evidence, classes.numClasses(), o.resolution);
-  }
-  CalibrationFit fit =
-      fitInputCalibration(evidence, labels, classes.numClasses(), classes.ignore_class);
-  fit.calibration.labels = o.labels;
-  fit.calibration.fitted_on = o.data + " (" + std::to_string(scans.size()) + " scans, " +
-                              dataset.describeEvidenceFiles() + ")";
-  fit.calibration.save(o.out);
-  std::cout << std::setprecision(4) << "calibration: " << fit.calibration.describe() << "\n"
-            << "  fitted on " << fit.points << " points against "
-            << (o.labels == "gt" ? "GT labels" : "cross-scan consensus") << "; mean NLL "
-            << fit.nll_before << " -> " << fit.nll_after << "\nwrote " << o.out << "\n";
+  const double cap = std::exp((a + b) / 2.0);
+  const double best = brier(std::log(cap)), with_adaptive = brier(std::log(adaptive));
+  std::ostringstream file;
+  file << std::setprecision(4)
+       << "# evidential_octomap read-out calibration, fitted by `evidential_octomap calibrate` on\n"
+       << "# " << o.data << " (" << scans.size() << " scans, " << queries.size()
+       << " GT points, evidence " << describeEvidence(ev) << ").\n"
+       << "# Brier score " << best << " (adaptive cap " << adaptive << ": " << with_adaptive
+       << "). Load it as node parameters (rosparam) or pass --evidence-cap to the CLI.\n"
+       << "evidence_cap: " << cap << "\nadaptive_cap: false\n";
+  writeFileAtomically(o.out, file.str());
+  std::cout << std::setprecision(4) << "evidence cap " << cap << ": Brier " << best
+            << " (the adaptive cap " << adaptive << " gives " << with_adaptive << ")\nwrote "
+            << o.out << "\n";
 }
 
 }  // namespace
@@ -68,25 +93,15 @@ void addCalibrateCommand(CLI::App& app) {
   auto o = std::make_shared<CalibrateOptions>();
   CLI::App* cmd = app.add_subcommand(
       "calibrate",
-      "Fit the calibration of a network's evidence (e' = scale * e^power) on labelled scans "
-      "(a validation split of your own) or without labels, and write it for map, compare, the "
-      "node (~calibration) and Python");
-  addDataOptions(cmd, &o->data, "Dataset directory with evidence/ (or logits/, probabilities/)",
-                 &o->classes);
-  cmd->add_option("--out", o->out, "Calibration file to write")->capture_default_str();
-  cmd->add_option("--labels", o->labels,
-                  "gt (the dataset's labels/) or consensus (no labels: each point against the "
-                  "other scans' predictions of its voxel)")
-      ->check(CLI::IsMember({"gt", "consensus"}))
-      ->capture_default_str();
+      "Fit the dempster read-out cap on labelled scans of your own network (a validation "
+      "split) and write it as a parameter file for the node (and --evidence-cap for map)");
+  addDataOptions(cmd, &o->data, "Dataset directory with labels/ and evidence", &o->classes);
+  cmd->add_option("--out", o->out, "Parameter file to write")->capture_default_str();
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
       ->capture_default_str();
-  cmd->add_option("--resolution", o->resolution, "Voxel size of the consensus [m]")
-      ->capture_default_str();
-  cmd->add_option("--logit-transform", o->logit_transform_name,
-                  "How logits/ files become evidence: softmax, exp or softplus")
-      ->check(CLI::IsMember({"softmax", "exp", "softplus"}))
-      ->capture_default_str();
+  addConfigOptions(cmd, &o->config, &o->resolution);
+  addEvidenceOptions(cmd, &o->evidence, &o->evidence_name);
+  cmd->add_flag("-q,--quiet", o->quiet, "No progress bars");
   cmd->callback([o]() { runCalibrate(*o); });
 }
 

@@ -39,8 +39,13 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
                 "down-sampling and the percentile threshold");
   cmd->add_option("--sbki-prior", c->sbki_prior, "S-BKI prior alpha0")->capture_default_str();
   cmd->add_option("--evidence-cap", c->evidence_cap,
-                  "dempster: read opinions with the fused log-evidence capped here (0: no cap)")
+                  "dempster: read opinions with the fused log-evidence capped here (0: no cap); "
+                  "a fixed cap instead of the adaptive one")
+      ->each([c](const std::string&) { c->adaptive_cap = false; })
       ->capture_default_str();
+  cmd->add_flag("!--fixed-cap", c->adaptive_cap,
+                "dempster: keep --evidence-cap fixed instead of following the evidence's mean "
+                "log-evidence per point (the default, docs/calibration.md)");
   cmd->add_option("--downsampling", c->downsampling,
                   "Semantic input down-sampling: average (grid of resolution/ds_multiplier) or "
                   "count_cap (the authors': at most ds_multiplier+1 points per 2x2x2-voxel block)")
@@ -103,15 +108,6 @@ void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_n
   cmd->add_flag("!--no-calibration", o->calibrate,
                 "Derived evidence as is: no rescaling of u to the error rate of such points "
                 "on the mapping scans");
-  addCalibrationOption(cmd, &o->calibration);
-}
-
-void addCalibrationOption(CLI::App* cmd, std::string* calibration) {
-  cmd->add_option("--calibration", *calibration,
-                  "Network evidence (--evidence file): auto (fit scale and power without labels "
-                  "on the mapping scans' cross-scan agreement), none (as it is), or a file of "
-                  "'evidential_octomap calibrate'")
-      ->capture_default_str();
 }
 
 void finishEvidenceOptions(const std::string& source_name, const std::string& classes_path,

@@ -29,8 +29,6 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* config, double* resolution)
 // --evidence, -E, --knn-k, --knn-radius, --learned-model; the source name is parsed into
 // options->source, and an empty model path set to its default, by finishEvidenceOptions().
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* options, std::string* source_name);
-// --calibration of network evidence (EvidenceOptions::calibration).
-void addCalibrationOption(CLI::App* cmd, std::string* calibration);
 void finishEvidenceOptions(const std::string& source_name, const std::string& classes_path,
                            const ClassTable& classes, EvidenceOptions* options);
 

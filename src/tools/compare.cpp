@@ -71,6 +71,7 @@ SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
   } else if (v == "dempster-no-cap") {  // Dempster's product read as is
     c.rule = "dempster";
     c.evidence_cap = 0.0;
+    c.adaptive_cap = false;
   } else if (v == "dempster-centre") {  // kernel distance to voxel centres (a point can miss
     c.rule = "dempster";                // its own voxel)
     c.kernel_distance = "centre";
@@ -81,6 +82,7 @@ SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
     c.rule = "dempster";
     c.reference_compat = true;
     c.evidence_cap = 0.0;
+    c.adaptive_cap = false;
   } else if (v == "sbki" || v == "ebs") {
     c.rule = v;
   } else {
@@ -110,6 +112,7 @@ bool setParameter(const std::string& key, const std::string& value, SemanticConf
                                                     {"evidence_floor", &c->evidence_floor}};
   for (const auto& [name, field] : fields) {
     if (key != name) continue;
+    if (field == &c->evidence_cap) c->adaptive_cap = false;  // a given cap is a fixed one
     try {
       size_t used = 0;
       *field = std::stod(value, &used);
@@ -304,7 +307,6 @@ void runSection(const CompareOptions& o, const std::string& dataset_label,
     ev.source = evidenceSourceFromName(source_name);
     std::vector<std::vector<float>> evidence;
     try {
-      resolveInputCalibration(scans, protocol.map_scans, classes, o.resolution, &ev);
       evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
     } catch (const std::exception& e) {
       sec.notes.push_back("Evidence source " + source_name + " skipped: " + e.what() + ".");
@@ -550,7 +552,6 @@ void addCompareCommand(CLI::App& app) {
                   "<dataset>.model)");
   cmd->add_flag("!--no-calibration", o->evidence.calibrate,
                 "Derived evidence as is (no rescaling of u to the error rate of such points)");
-  addCalibrationOption(cmd, &o->evidence.calibration);
   cmd->add_option("--plan", o->plan,
                   "default: every variant with onehot, dempster and dempster-paper for "
                   "knn-vote and confusion, held-out dempster/sbki/ebs with onehot (~10 min); "

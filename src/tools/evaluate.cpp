@@ -53,7 +53,6 @@ void runEval(const EvalOptions& o) {
   std::vector<float> query_evidence;
   std::string input_description = "input predictions (hard labels), per point";
   if (!derivedFromHardLabels(ev.source) || dataset.hasPredictions() || o.synthetic) {
-    resolveInputCalibration(scans, protocol.map_scans, classes, tree->getResolution(), &ev);
     evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
     input_description = inputDescription(ev);
   }

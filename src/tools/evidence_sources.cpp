@@ -70,8 +70,7 @@ std::string describeEvidence(const EvidenceOptions& o) {
   s << evidenceSourceName(o.source);
   switch (o.source) {
     case EvidenceSource::kFile:
-      s << " (per-point " << (o.files.empty() ? "evidence files" : o.files) << " of the dataset; "
-        << o.input_calibration.describe() << ")";
+      s << " (per-point " << (o.files.empty() ? "evidence files" : o.files) << " of the dataset)";
       return s.str();
     case EvidenceSource::kOneHot:
       s << ", E=" << o.magnitude;
@@ -216,11 +215,7 @@ std::vector<float> deriveEvidence(const Scan& scan, size_t scan_index,
         throw std::runtime_error("evidence source 'file' needs evidence/ or alpha/ files, scan " +
                                  scan.name + " has none");
       }
-      {
-        std::vector<float> e = scan.evidence;
-        options.input_calibration.apply(e.data(), scan.size(), num_classes);
-        return e;
-      }
+      return scan.evidence;
     case EvidenceSource::kOneHot:
       requirePredictions(scan, "onehot");
       return oneHotEvidence(scan.predicted, num_classes, options.magnitude);

@@ -20,7 +20,6 @@
 #include <vector>
 
 #include "dataset.h"
-#include "evidential_octomap/input_calibration.h"
 #include "evidential_octomap/learned_evidence.h"
 
 namespace evidential_octomap::tools {
@@ -39,13 +38,6 @@ struct EvidenceOptions {
   // Derived sources only: rescale every point's evidence so that its u is the error rate of
   // such points on the mapping scans (evidence_calibration.h).
   bool calibrate = true;
-  // kFile: how the network's evidence is calibrated before mapping (input_calibration.h):
-  // "auto" fits it without labels on the mapping scans' cross-scan consensus
-  // (consensus_labels.h), "none" maps the evidence as it is, anything else is a calibration
-  // file written by `evidential_octomap calibrate`. resolveInputCalibration() turns it into
-  // `input_calibration`, which deriveEvidence applies.
-  std::string calibration = "none";
-  InputCalibration input_calibration;
 };
 
 EvidenceSource evidenceSourceFromName(const std::string& name);  // throws std::invalid_argument

@@ -47,7 +47,6 @@ void runMap(const MapOptions& o) {
   std::string predictions_note;
   if (o.synthetic) predictions_note = useSyntheticPredictions(&scans, classes, o.noise);
   const Protocol protocol = makeProtocol(o.protocol, scans.size());
-  resolveInputCalibration(scans, protocol.map_scans, classes, o.resolution, &ev);
   const auto evidence =
       deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
   MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,

@@ -7,8 +7,6 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "calibration_fit.h"
-#include "consensus_labels.h"
 #include "evidence_calibration.h"
 #include "progress_bar.h"
 
@@ -95,29 +93,6 @@ std::vector<octomap::OcTreeKey> endpointKeys(const std::vector<Scan>& scans,
     }
   }
   return keys;
-}
-
-void resolveInputCalibration(const std::vector<Scan>& scans, const std::vector<size_t>& which,
-                             const ClassTable& classes, double resolution,
-                             EvidenceOptions* options) {
-  options->input_calibration = InputCalibration{};
-  if (options->source != EvidenceSource::kFile || options->calibration == "none") return;
-  if (options->calibration != "auto") {
-    options->input_calibration = InputCalibration::load(options->calibration);
-    return;
-  }
-  const int C = classes.numClasses();
-  std::vector<std::vector<float>> evidence(scans.size());
-  for (size_t s : which) evidence[s] = scans.at(s).evidence;
-  std::vector<std::vector<int>> labels = consensusLabels(scans, which, evidence, C, resolution);
-  try {
-    options->input_calibration =
-        fitInputCalibration(evidence, labels, C, classes.ignore_class).calibration;
-  } catch (const std::runtime_error&) {
-    return;  // no voxel seen by two scans (a single scan): nothing to fit, map as it is
-  }
-  options->input_calibration.labels = "consensus";
-  options->input_calibration.fitted_on = std::to_string(which.size()) + " mapping scans";
 }
 
 std::vector<std::vector<float>> deriveEvidenceFor(const std::vector<Scan>& scans,

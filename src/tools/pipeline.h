@@ -34,14 +34,6 @@ Protocol makeProtocol(const std::string& name, size_t num_scans);  // throws std
 // Loads scans 0..n-1 of the dataset (n = min(limit, size), limit 0 = all), with a progress bar.
 std::vector<Scan> loadScans(const Dataset& dataset, size_t limit, bool progress);
 
-// Sets options->input_calibration for network evidence (source file) from options->calibration:
-// "none" the identity, "auto" fitted without labels on the cross-scan consensus of the `which`
-// scans' predictions in voxels of `resolution`, else the calibration file of that path.
-// Derived and learned sources keep the identity. Throws std::runtime_error naming the problem.
-void resolveInputCalibration(const std::vector<Scan>& scans, const std::vector<size_t>& which,
-                             const ClassTable& classes, double resolution,
-                             EvidenceOptions* options);
-
 // GT-labelled points (gt != ignore_class) of `which` scans in the world frame, with the input's
 // prediction of each (-1 when the scan has none). With `evidence` (indexed like `scans`) and
 // `query_evidence`, the C evidence values of every query are appended there, in query order.
