@@ -17,6 +17,11 @@ void addExportCommand(CLI::App& app);    // export_color.cpp
 void addMergeCommand(CLI::App& app);     // merge.cpp
 void addInfoCommand(CLI::App& app);      // info.cpp
 void addFeaturesCommand(CLI::App& app);  // features.cpp
+void addGenerateCommand(CLI::App& app);  // generate.cpp
+
+// The command line as typed (main() records it), for the READMEs of generated data.
+void setCommandLine(int argc, char** argv);
+const std::string& commandLine();
 
 // --- shared option groups (defaults come from the structs, never restated) -----------------
 // --data (an existing path, described by data_help) and --classes (an existing class table YAML),

@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
   t::addMergeCommand(app);
   t::addInfoCommand(app);
   t::addFeaturesCommand(app);
+  t::addGenerateCommand(app);
+  t::setCommandLine(argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
