@@ -13,18 +13,18 @@ void BorderMap::build(const Terrain& terrain, const std::vector<Primitive>& obje
   grid_ = Grid2::covering(t.x0, t.y0, t.x0 + t.nx * t.res, t.y0 + t.ny * t.res, kResolution);
   C_ = num_classes;
   const uint8_t cap = uint8_t(kCap * 10);
-  dist_.assign(grid_.size() * size_t(C_), cap);
+  for (auto& layer : dist_) layer.assign(grid_.size() * size_t(C_), cap);
   // Seeds: ground kinds (sampled at the four terrain cells of each border cell) and footprints of
   // solid objects and bushes near the ground (canopies overhang everything and are no border).
-  auto seed = [&](size_t cell, int cls) {
-    if (cls >= 0) dist_[cell * C_ + size_t(cls)] = 0;
+  auto seed = [&](int layer, size_t cell, int cls) {
+    if (cls >= 0) dist_[layer][cell * C_ + size_t(cls)] = 0;
   };
   for (int j = 0; j < grid_.ny; ++j) {
     for (int i = 0; i < grid_.nx; ++i) {
       const double x = grid_.x0 + i * kResolution, y = grid_.y0 + j * kResolution;
       for (double dy : {0.125, 0.375})
         for (double dx : {0.125, 0.375})
-          seed(grid_.index(i, j), classes.cls[int(terrain.kindAt(x + dx, y + dy))]);
+          seed(0, grid_.index(i, j), classes.cls[int(terrain.kindAt(x + dx, y + dy))]);
     }
   }
   for (const Primitive& p : objects) {
@@ -46,16 +46,18 @@ void BorderMap::build(const Terrain& terrain, const std::vector<Primitive>& obje
             break;
           default: in = std::abs(lx) <= p.half.x() + 0.25 && std::abs(ly) <= p.half.y() + 0.25;
         }
-        if (in) seed(grid_.index(i, j), cls);
+        if (in) seed(1, grid_.index(i, j), cls);
       }
     }
   }
   // Two-pass chamfer distance transform per class (3-4 weights: within 8 % of Euclidean).
   const int a = 5, b = 7;  // decimetres for 0.5 m orthogonal, 0.707 m diagonal
   auto relax = [&](size_t to, size_t from, int w) {
-    for (int k = 0; k < C_; ++k) {
-      const int v = dist_[from * C_ + k] + w;
-      if (v < dist_[to * C_ + k]) dist_[to * C_ + k] = uint8_t(v);
+    for (auto& d : dist_) {
+      for (int k = 0; k < C_; ++k) {
+        const int v = d[from * C_ + k] + w;
+        if (v < d[to * C_ + k]) d[to * C_ + k] = uint8_t(v);
+      }
     }
   };
   for (int j = 0; j < grid_.ny; ++j) {
@@ -80,16 +82,19 @@ void BorderMap::build(const Terrain& terrain, const std::vector<Primitive>& obje
       }
     }
   }
-  for (uint8_t& d : dist_) d = std::min(d, cap);
+  for (auto& layer : dist_)
+    for (uint8_t& d : layer) d = std::min(d, cap);
 }
 
-float BorderMap::nearestOther(double x, double y, int cls, int* other) const {
+float BorderMap::nearestOther(double x, double y, int cls, bool with_ground, int* other) const {
   const size_t c = grid_.cellOf(x, y);
   int best = int(kCap * 10), arg = -1;
-  for (int k = 1; k < C_; ++k) {  // class 0 is void: never a neighbour
-    if (k == cls) continue;
-    const int v = dist_[c * C_ + k];
-    if (v < best) best = v, arg = k;
+  for (int layer = with_ground ? 0 : 1; layer < 2; ++layer) {
+    for (int k = 1; k < C_; ++k) {  // class 0 is void: never a neighbour
+      if (k == cls) continue;
+      const int v = dist_[layer][c * C_ + k];
+      if (v < best) best = v, arg = k;
+    }
   }
   *other = arg;
   return best * 0.1f;

@@ -88,7 +88,7 @@ std::vector<LidarPoint> castScan(const Scene& scene, const Trajectory& trajector
       p.kind = m->kind;
       p.centre = m->centre(t_fire, scene.terrain).cast<float>();
       p.half = 0.5f * m->size;
-      p.yaw = float(m->yaw());
+      p.setYaw(float(m->yaw()));
       p.reflectivity = m->reflectivity;
       boxes.push_back(p);
       box_instance.push_back(m->instance);

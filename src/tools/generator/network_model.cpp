@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 
@@ -20,8 +22,9 @@ NetworkParams NetworkParams::preset_named(const std::string& name) {
   p.preset = name;
   if (name == "good") return p;
   if (name == "poor") {
-    p.margin = 4.0, p.range_weight = 2.2, p.border_weight = 3.2, p.rare_weight = 1.4;
-    p.field_sigma = 1.0, p.object_sigma = 0.8, p.point_sigma = 0.9, p.wrong_rate = 0.06;
+    p.margin = 4.0, p.range_weight = 2.0, p.border_weight = 3.0, p.rare_weight = 1.3;
+    p.field_sigma = 0.9, p.object_sigma = 0.7, p.point_sigma = 0.8, p.wrong_rate = 0.02;
+    p.confidence_noise = 0.4, p.logit_gain = 1.5;
     return p;
   }
   if (name == "overconfident") {
@@ -42,7 +45,7 @@ std::string NetworkParams::describe() const {
     << ", border_weight " << border_weight << ", border_width " << border_width
     << " m, rare_weight " << rare_weight << ", field_sigma " << field_sigma << ", object_sigma "
     << object_sigma << ", point_sigma " << point_sigma << ", partner_gain " << partner_gain
-    << ", class_noise " << class_noise << ", confidence_noise " << confidence_noise
+    << ", logit_gain " << logit_gain << ", class_noise " << class_noise << ", confidence_noise " << confidence_noise
     << ", wrong_rate " << wrong_rate << " of " << wrong_cell << " m cells (boost " << wrong_boost
     << "), evidence_scale " << evidence_scale << ", temperature " << temperature
     << ", evidence activation " << (softplus ? "softplus" : "exp");
@@ -75,7 +78,7 @@ NetworkOutput NetworkModel::run(const Scene& scene, const std::vector<LidarPoint
     const double x = pt.p_W.x(), y = pt.p_W.y(), z = pt.p_W.z();
     // Border: the nearest other class in xy, or the ground under an object's low parts.
     int other = -1;
-    double d_border = scene.borders.nearestOther(x, y, g, &other);
+    double d_border = scene.borders.nearestOther(x, y, g, pt.object == 0, &other);
     if (pt.height > 2.5 && pt.kind != Kind::kBuilding) d_border = BorderMap::kCap, other = -1;
     if (pt.object != 0 && pt.height < d_border) {
       const int ground = classes_.cls[int(scene.terrain.kindAt(x, y))];
@@ -112,7 +115,7 @@ NetworkOutput NetworkModel::run(const Scene& scene, const std::vector<LidarPoint
     }
     int arg = 0;
     for (int c = 0; c < C; ++c) {
-      zl[c] += float(shared);
+      zl[c] = float((zl[c] + shared) * p_.logit_gain);
       if (zl[c] > zl[arg]) arg = c;
     }
     out.predicted[i] = arg;

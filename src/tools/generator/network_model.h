@@ -34,7 +34,7 @@ struct Scene;
 
 struct NetworkParams {
   std::string preset = "good";
-  double margin = 5.0;
+  double margin = 4.5;
   double range_weight = 1.6;
   double border_weight = 2.6;
   double border_width = 0.5;     // [m]
@@ -42,10 +42,11 @@ struct NetworkParams {
   double field_sigma = 0.7;
   double object_sigma = 0.5;
   double point_sigma = 0.7;
-  double partner_gain = 1.0;
+  double partner_gain = 0.5;
+  double logit_gain = 1.7;       // scales every logit: confidence without changing the argmax
   double class_noise = 0.9;
-  double confidence_noise = 0.8;
-  double wrong_rate = 0.03;
+  double confidence_noise = 0.2;
+  double wrong_rate = 0.01;
   double wrong_cell = 4.0;       // [m]
   double wrong_boost = 1.5;
   double evidence_scale = 1.0;   // the factor the map is not told

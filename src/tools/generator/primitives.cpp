@@ -14,13 +14,19 @@ float Primitive::radiusXY() const {
     default: return std::hypot(half.x(), half.y());
   }
 }
+void Primitive::setYaw(float y) {
+  yaw = y;
+  cos_yaw = float(std::cos(double(y)));
+  sin_yaw = float(std::sin(double(y)));
+}
+
 float Primitive::zmin() const { return centre.z() - half.z(); }
 float Primitive::zmax() const { return centre.z() + half.z(); }
 
 bool Primitive::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tmax,
                           double* t0, double* t1, Eigen::Vector3f* normal) const {
   // Into the object frame: translate, rotate by -yaw.
-  const double c = std::cos(double(yaw)), s = std::sin(double(yaw));
+  const double c = cos_yaw, s = sin_yaw;
   const double px = o.x() - centre.x(), py = o.y() - centre.y(), pz = o.z() - centre.z();
   const Eigen::Vector3d p(c * px + s * py, -s * px + c * py, pz);
   const Eigen::Vector3d v(c * d.x() + s * d.y(), -s * d.x() + c * d.y(), d.z());

@@ -24,9 +24,11 @@ struct Primitive {
   Eigen::Vector3f half;   // half extents in the object frame (cylinder: radius, radius, half length
                           // along its axis for kCylinderZ; half length, radius, radius for X)
   float yaw = 0.0f;
+  float cos_yaw = 1.0f, sin_yaw = 0.0f;  // of yaw; setYaw() keeps them in step
   uint32_t id = 0;        // object id (network model's per-object correlation); index + 1
   float reflectivity = 0.3f;
 
+  void setYaw(float y);
   // Entry and exit of the ray (o, unit d) in [0, tmax]; the outward normal at entry.
   bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tmax, double* t0,
                  double* t1, Eigen::Vector3f* normal) const;

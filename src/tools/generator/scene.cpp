@@ -51,7 +51,7 @@ class Placer {
     p.density = density;
     p.centre = c.cast<float>();
     p.half = half.cast<float>();
-    p.yaw = float(yaw);
+    p.setYaw(float(yaw));
     p.id = uint32_t(s_.objects.size() + 1);
     p.reflectivity = kindInfo(kind).reflectivity * (1.0f + reflect_jitter);
     s_.objects.push_back(p);
@@ -62,7 +62,7 @@ class Placer {
     const double g = ground(x, y);
     const bool conifer = u(h, 10) < 0.5;
     const double trunk_r = (0.12 + 0.23 * u(h, 11)) * scale;
-    const double crown_r = (conifer ? 1.3 + 1.2 * u(h, 12) : 2.0 + 1.8 * u(h, 12)) * scale;
+    const double crown_r = (conifer ? 1.2 + 1.0 * u(h, 12) : 1.8 + 1.4 * u(h, 12)) * scale;
     const double crown_h = (conifer ? 3.5 + 3.0 * u(h, 13) : 2.0 + 2.0 * u(h, 13)) * scale;
     const double crown_base = (conifer ? 1.2 + 1.5 * u(h, 14) : 2.0 + 2.5 * u(h, 14)) * scale;
     const double top = crown_base + 2.0 * crown_h * 0.9;
@@ -71,7 +71,7 @@ class Placer {
         0.0, 0.0f, jitter);
     add(Shape::kEllipsoid, Kind::kTree, {x, y, g + crown_base + crown_h},
         {crown_r, crown_r * (0.85 + 0.3 * u(h, 16)), crown_h}, kTwoPi * u(h, 17),
-        float(0.5 + 0.8 * u(h, 18)), jitter);
+        float(0.3 + 0.6 * u(h, 18)), jitter);
   }
   void bush(double x, double y, uint64_t h, double scale = 1.0) {
     const double rx = (0.5 + 1.0 * u(h, 20)) * scale, ry = rx * (0.7 + 0.5 * u(h, 21));
@@ -104,7 +104,7 @@ class Placer {
 };
 
 void placeForest(Scene* s, Placer& P, double w) {
-  P.scatter(1, 5.0, 0.75, w + 1.2, [&](double x, double y, uint64_t h) { P.tree(x, y, h); });
+  P.scatter(1, 5.0, 0.6, w + 1.2, [&](double x, double y, uint64_t h) { P.tree(x, y, h); });
   P.scatter(2, 4.0, 0.45, w + 0.4, [&](double x, double y, uint64_t h) { P.bush(x, y, h); });
   P.scatter(3, 12.0, 0.35, w + 0.6, [&](double x, double y, uint64_t h) { P.log(x, y, h); });
   (void)s;
@@ -125,12 +125,13 @@ void placeRocky(Scene*, Placer& P, double w) {
   P.scatter(1, 20.0, 0.3, w + 1.5, [&](double x, double y, uint64_t h) { P.tree(x, y, h, 0.8); });
 }
 
-void placeFarm(Scene* s, Placer& P, double w, const Route& route, double max_arc, uint64_t key) {
+void placeFarm(Scene* s, Placer& P, double w, const Route& route, double a0, double a1,
+               uint64_t key) {
   // Along the road: a fence on one side (posts every 2.5 m, two rails, gaps), utility poles on
   // the other, parked vehicles on the verge.
   const double fence_side = unitOf(hashOf(key, 60)) < 0.5 ? 1.0 : -1.0;
   const double fence_off = w + 3.0 + 2.0 * unitOf(hashOf(key, 61));
-  for (double a = 0.0; a + 2.5 < max_arc; a += 2.5) {
+  for (double a = 2.5 * std::floor(a0 / 2.5); a + 2.5 < a1; a += 2.5) {
     if (fbm2(hashOf(key, 62), a, 0.0, 40.0, 2) < -0.25) continue;  // a gap (gate, field entry)
     const Eigen::Vector2d t = route.tangent(a), n(-t.y(), t.x());
     const Eigen::Vector2d p = route.at(a) + fence_side * fence_off * n;
@@ -145,15 +146,15 @@ void placeFarm(Scene* s, Placer& P, double w, const Route& route, double max_arc
       P.add(Shape::kBox, Kind::kFence, {m.x(), m.y(), gm + z}, {0.5 * len, 0.025, 0.06}, yaw);
     }
   }
-  for (double a = 15.0; a < max_arc; a += 38.0) {
+  for (double a = 38.0 * std::floor(a0 / 38.0) + 15.0; a < a1; a += 38.0) {
     const Eigen::Vector2d t = route.tangent(a), n(-t.y(), t.x());
     const Eigen::Vector2d p = route.at(a) - fence_side * (w + 3.5) * n;
     if (!P.clearOf(p.x(), p.y(), w + 2.0)) continue;
     P.add(Shape::kCylinderZ, Kind::kPole, {p.x(), p.y(), P.ground(p.x(), p.y()) + 4.0},
           {0.14, 0.14, 4.3}, 0.0);
   }
-  for (double a = 30.0; a < max_arc; a += 55.0) {
-    const uint64_t h = hashOf(key, 63, uint64_t(a));
+  for (double a = 55.0 * std::floor(a0 / 55.0) + 30.0; a < a1; a += 55.0) {
+    const uint64_t h = hashOf(key, 63, uint64_t(int64_t(a)));
     if (unitOf(h) > 0.4) continue;
     const Eigen::Vector2d t = route.tangent(a), n(-t.y(), t.x());
     const Eigen::Vector2d p = route.at(a) - fence_side * (w + 2.0) * n;
@@ -200,7 +201,13 @@ std::unique_ptr<Scene> Scene::build(Family family, uint64_t seed, const Route& r
   }
   s.extent = Grid2::covering(xmin - margin, ymin - margin, xmax + margin, ymax + margin,
                              Terrain::kResolution);
-  s.path = PathField::make(route, max_arc,
+  // The trail exists beyond the part driven: 60 m ahead (and behind the start of a loop).
+  double a0 = 0.0, a1 = std::min(max_arc + 60.0, route.length);
+  if (route.kind == RouteKind::kLoop) {
+    a0 = -60.0, a1 = max_arc + 60.0;
+    if (a1 - a0 > route.length) a0 = 0.0, a1 = route.length;
+  }
+  s.path = PathField::make(route, a0, a1,
                            Grid2::covering(xmin - margin, ymin - margin, xmax + margin,
                                            ymax + margin, 0.5));
   s.terrain = Terrain::build(family, seed, s.extent, route, s.path);
@@ -211,7 +218,7 @@ std::unique_ptr<Scene> Scene::build(Family family, uint64_t seed, const Route& r
     case Family::kForest: placeForest(&s, P, w); break;
     case Family::kGrassland: placeGrassland(&s, P, w); break;
     case Family::kRocky: placeRocky(&s, P, w); break;
-    case Family::kFarm: placeFarm(&s, P, w, route, std::min(max_arc, route.length), key); break;
+    case Family::kFarm: placeFarm(&s, P, w, route, a0, a1, key); break;
   }
   s.object_grid.build(&s.objects, s.extent);
   int C = 0;

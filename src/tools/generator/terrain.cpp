@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 
 #include "noise.h"
 #include "rng.h"
@@ -9,16 +11,23 @@
 
 namespace evidential_octomap::generator {
 
-PathField PathField::make(const Route& route, double max_arc, const Grid2& grid) {
+PathField PathField::make(const Route& route, double a0, double a1, const Grid2& grid) {
   PathField f;
   f.grid = grid;
+  f.a0 = a0;
+  f.a1 = a1;
   f.dist.assign(grid.size(), kMax);
   f.arc.assign(grid.size(), 0.0f);
   const int r = int(std::ceil(kMax / grid.res));
-  const size_t n = std::min(route.xy.size(), size_t(max_arc / route.step) + 2);
   // Every sample stamps a disk; samples are in order, so ties go to the first (deterministic).
-  for (size_t k = 0; k < n; ++k) {
-    const Eigen::Vector2d& p = route.xy[k];
+  for (double a = a0; a <= a1; a += route.step) {
+    const Eigen::Vector2d p = route.at(a);
+    double arc = route.kind == RouteKind::kLoop ? std::fmod(a, route.length) : a;
+    if (arc < 0.0) arc += route.length;
+    if (p.x() < grid.x0 - kMax || p.y() < grid.y0 - kMax || p.x() > grid.x0 + grid.nx * grid.res + kMax ||
+        p.y() > grid.y0 + grid.ny * grid.res + kMax) {
+      continue;
+    }
     const int ci = grid.ix(p.x()), cj = grid.iy(p.y());
     for (int j = std::max(0, cj - r); j <= std::min(grid.ny - 1, cj + r); ++j) {
       for (int i = std::max(0, ci - r); i <= std::min(grid.nx - 1, ci + r); ++i) {
@@ -27,7 +36,7 @@ PathField PathField::make(const Route& route, double max_arc, const Grid2& grid)
         const size_t c = grid.index(i, j);
         if (d < f.dist[c]) {
           f.dist[c] = d;
-          f.arc[c] = float(k * route.step);
+          f.arc[c] = float(arc);
         }
       }
     }
@@ -65,35 +74,29 @@ double smoothstep(double e0, double e1, double x) {
   return t * t * (3.0 - 2.0 * t);
 }
 
-// Ground kind off the trail, and the grass height there.
+// Ground kind off the trail, and the grass height there. Grass heights fade in over a band of
+// the mask so that the surface stays Lipschitz (the ray marcher's step depends on it).
 void groundOf(Family family, uint64_t key, double x, double y, Kind* kind, float* grass) {
   const float a = fbm2(hashOf(key, 11), x, y, 25.0, 3);
   const float b = fbm2(hashOf(key, 12), x, y, 12.0, 2);
   const float tall = 0.5f + 0.5f * fbm2(hashOf(key, 13), x, y, 8.0, 2);
+  auto fade = [](float v, float e0, float e1) { return float(smoothstep(e0, e1, v)); };
   switch (family) {
     case Family::kForest:  // forest floor: grass in the lighter patches, bare dirt elsewhere
-      if (a > -0.05f) {
-        *kind = Kind::kGrass, *grass = 0.08f + 0.3f * tall;
-      } else {
-        *kind = Kind::kDirt, *grass = 0.0f;
-      }
+      *kind = a > -0.05f ? Kind::kGrass : Kind::kDirt;
+      *grass = (0.08f + 0.3f * tall) * fade(a, -0.05f, 0.15f);
       break;
     case Family::kGrassland:
-      *kind = Kind::kGrass, *grass = 0.15f + 0.45f * tall;
-      if (a < -0.45f) *kind = Kind::kMud, *grass = 0.0f;
+      *kind = a < -0.45f ? Kind::kMud : Kind::kGrass;
+      *grass = (0.15f + 0.45f * tall) * fade(a, -0.45f, -0.25f);
       break;
     case Family::kRocky:
-      if (b > 0.25f) {
-        *kind = Kind::kGrass, *grass = 0.05f + 0.2f * tall;
-      } else if (a > -0.1f) {
-        *kind = Kind::kGravel, *grass = 0.0f;
-      } else {
-        *kind = Kind::kDirt, *grass = 0.0f;
-      }
+      *kind = b > 0.25f ? Kind::kGrass : (a > -0.1f ? Kind::kGravel : Kind::kDirt);
+      *grass = (0.05f + 0.2f * tall) * fade(b, 0.25f, 0.4f);
       break;
     case Family::kFarm:
-      *kind = Kind::kGrass, *grass = 0.1f + 0.35f * tall;
-      if (b < -0.5f) *kind = Kind::kDirt, *grass = 0.0f;
+      *kind = b < -0.5f ? Kind::kDirt : Kind::kGrass;
+      *grass = (0.1f + 0.35f * tall) * fade(b, -0.5f, -0.3f);
       break;
   }
 }
@@ -131,14 +134,10 @@ Terrain Terrain::build(Family family, uint64_t seed, const Grid2& grid, const Ro
   }
 
   // Puddles: on the trail (in the ruts) and, for some families, in off-trail depressions.
-  const double driven = [&] {
-    double m = 0.0;
-    for (float a : path.arc) m = std::max(m, double(a));
-    return m;
-  }();
   if (P.puddles_per_100m > 0.0) {
-    for (double s = 10.0; s < driven; s += 25.0) {
-      const uint64_t h = hashOf(key, 4, uint64_t(s));
+    // On a 25 m lattice of arc length, so a longer run keeps the shorter run's puddles.
+    for (double s = 25.0 * std::floor(path.a0 / 25.0) + 10.0; s < path.a1; s += 25.0) {
+      const uint64_t h = hashOf(key, 4, uint64_t(int64_t(std::floor(s))));
       if (unitOf(h) > P.puddles_per_100m / 4.0) continue;
       const Eigen::Vector2d t = route.tangent(s), n(-t.y(), t.x());
       const double lateral = (unitOf(hashOf(h, 1)) - 0.5) * 1.6;
@@ -188,8 +187,8 @@ Terrain Terrain::build(Family family, uint64_t seed, const Grid2& grid, const Ro
         if (family != Family::kRocky && fbm2(hashOf(key, 14), x, y, 15.0, 2) > 0.45f) {
           kind = Kind::kMud;
         }
-      } else if (d < trail_w + 0.6) {
-        grass *= float((d - trail_w) / 0.6);  // grass thins out at the trail's edge
+      } else {
+        grass *= float(smoothstep(trail_w, trail_w + 1.5, d));  // thins out at the trail's edge
       }
       T.cells_[grid.index(i, j)] = {float(h), grass};
       T.kind_[grid.index(i, j)] = uint8_t(kind);
@@ -209,10 +208,10 @@ Terrain Terrain::build(Family family, uint64_t seed, const Grid2& grid, const Ro
         const double q = std::hypot(x - p.centre.x(), y - p.centre.y()) / r;
         Cell& c = T.cells_[grid.index(i, j)];
         uint8_t& k = T.kind_[grid.index(i, j)];
+        c.grass *= float(smoothstep(r + 0.2, ring, q * r));  // none on the wet ground
         if (q < 1.0) {
           const double b = 1.0 - q * q;
           c.h = float(c.h - depth * b * b);
-          c.grass = 0.0f;
           if (c.h < p.level) {
             c.h = float(p.level);
             k = uint8_t(Kind::kPuddle);
@@ -221,25 +220,49 @@ Terrain Terrain::build(Family family, uint64_t seed, const Grid2& grid, const Ro
           }
         } else if (q * r < ring && Kind(k) != Kind::kPuddle) {
           k = uint8_t(Kind::kMud);
-          c.grass = 0.0f;
         }
       }
     }
   }
 
-  // Lipschitz bound of h + grass over the grid (per-axis differences, both fields).
-  double L = 0.0;
-  for (int j = 0; j + 1 < grid.ny; ++j) {
-    for (int i = 0; i + 1 < grid.nx; ++i) {
+  // Local bounds per 4 m tile, dilated by one tile: the steepest slope of h + f grass (any f)
+  // and the highest surface. A marching step never leaves the dilated tile, so it is safe.
+  const int tiles_x = (grid.nx + kTileCells - 1) / kTileCells;
+  const int tiles_y = (grid.ny + kTileCells - 1) / kTileCells;
+  std::vector<float> slope(size_t(tiles_x) * tiles_y, 0.0f), top(slope.size(), -1e30f);
+  for (int j = 0; j < grid.ny; ++j) {
+    for (int i = 0; i < grid.nx; ++i) {
       const Cell& a = T.cells_[grid.index(i, j)];
+      const size_t t = size_t(j / kTileCells) * tiles_x + size_t(i / kTileCells);
+      top[t] = std::max(top[t], a.h + a.grass);
+      if (i + 1 >= grid.nx || j + 1 >= grid.ny) continue;
       const Cell& b = T.cells_[grid.index(i + 1, j)];
       const Cell& c = T.cells_[grid.index(i, j + 1)];
-      const double dx = std::max(std::abs(b.h - a.h), std::abs(b.h + b.grass - a.h - a.grass));
-      const double dy = std::max(std::abs(c.h - a.h), std::abs(c.h + c.grass - a.h - a.grass));
-      L = std::max(L, std::hypot(dx, dy) / grid.res);
+      const double dx = std::abs(b.h - a.h) + std::abs(b.grass - a.grass);
+      const double dy = std::abs(c.h - a.h) + std::abs(c.grass - a.grass);
+      slope[t] = std::max(slope[t], float(std::hypot(dx, dy) / grid.res));
     }
   }
-  T.lipschitz_ = 1.05 * L + 0.01;
+  T.tiles_x_ = tiles_x;
+  T.tiles_y_ = tiles_y;
+  T.tile_slope_.assign(slope.size(), 0.0f);
+  T.tile_top_.assign(slope.size(), -1e30f);
+  double L = 0.0;
+  for (int ty = 0; ty < tiles_y; ++ty) {
+    for (int tx = 0; tx < tiles_x; ++tx) {
+      const size_t t = size_t(ty) * tiles_x + tx;
+      for (int oy = std::max(0, ty - 1); oy <= std::min(tiles_y - 1, ty + 1); ++oy) {
+        for (int ox = std::max(0, tx - 1); ox <= std::min(tiles_x - 1, tx + 1); ++ox) {
+          const size_t o = size_t(oy) * tiles_x + ox;
+          T.tile_slope_[t] = std::max(T.tile_slope_[t], slope[o]);
+          T.tile_top_[t] = std::max(T.tile_top_[t], top[o]);
+        }
+      }
+      T.tile_slope_[t] = 1.05f * T.tile_slope_[t] + 0.01f;
+      L = std::max(L, double(T.tile_slope_[t]));
+    }
+  }
+  if (std::getenv("GEN_DEBUG")) std::fprintf(stderr, "terrain max local slope bound %.3f\n", L);
   return T;
 }
 
@@ -273,16 +296,26 @@ Eigen::Vector3f Terrain::normal(double x, double y) const {
 bool Terrain::march(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tmax,
                     float grass_fraction, double* t_hit) const {
   const double dh = std::hypot(d.x(), d.y());
-  const double rate = lipschitz_ * dh - d.z();  // fastest the height above ground can fall
+  // The longest step that stays within the dilated tile of its start.
+  const double tile = kTileCells * grid_.res;
+  const double max_step = tile / std::max(dh, 1e-6);
   double f = o.z() - surface(o.x(), o.y(), grass_fraction);
   if (f <= 0.0) return false;  // the sensor is under the surface: nothing sensible to return
-  if (rate <= 0.0) return false;
   double t = 0.0;
+  Eigen::Vector3d p = o;
   while (true) {
-    const double step = std::max(f / rate, 0.03);
+    const size_t k = tileOf(p.x(), p.y());
+    const double L = tile_slope_[k];
+    // Sphere tracing with the local Lipschitz bound, or a free step while the ray stays above
+    // the highest surface around.
+    const double rate = L * dh - d.z();
+    double step = rate > 0.0 ? f / rate : max_step;
+    const double above = p.z() - tile_top_[k];
+    if (above > 0.0) step = std::max(step, d.z() >= 0.0 ? max_step : above / -d.z());
+    step = std::clamp(step, 0.03, max_step);
     const double t_next = t + step;
     if (t_next > tmax) return false;
-    const Eigen::Vector3d p = o + t_next * d;
+    p = o + t_next * d;
     if (!grid_.inside(p.x(), p.y())) return false;
     const double f_next = p.z() - surface(p.x(), p.y(), grass_fraction);
     if (f_next <= 0.0) {

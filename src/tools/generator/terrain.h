@@ -15,15 +15,16 @@ namespace evidential_octomap::generator {
 
 struct Route;
 
-// Distance from every 0.5 m cell to the driven part of the route (capped at kMax) and the arc
-// length of the nearest route sample.
+// Distance from every 0.5 m cell to the route's arc range [a0, a1] (the part driven and some
+// way beyond; capped at kMax) and the arc length of the nearest route sample (in [0, length)).
 struct PathField {
   static constexpr float kMax = 30.0f;
   Grid2 grid;
   std::vector<float> dist;
   std::vector<float> arc;
   float distance(double x, double y) const { return dist[grid.cellOf(x, y)]; }
-  static PathField make(const Route& route, double max_arc, const Grid2& grid);
+  double a0 = 0.0, a1 = 0.0;
+  static PathField make(const Route& route, double a0, double a1, const Grid2& grid);
 };
 
 struct TerrainParams {
@@ -58,7 +59,7 @@ class Terrain {
   Eigen::Vector3f normal(double x, double y) const;
   // First crossing of the ray o + t d (t in (0, tmax]) with the surface height + grass_fraction
   // times the grass height (each ray sees the grass layer's top at its own depth: a porous
-  // layer). Sphere tracing with the surface's Lipschitz bound, then bisection.
+  // layer). Sphere tracing with local Lipschitz bounds, then bisection.
   bool march(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tmax,
              float grass_fraction, double* t) const;
 
@@ -69,12 +70,19 @@ class Terrain {
   // Bilinear h + f * grass.
   double surface(double x, double y, float grass_fraction) const;
 
+  static constexpr int kTileCells = 16;  // 4 m tiles of the marcher's local bounds
+  size_t tileOf(double x, double y) const {
+    const int tx = grid_.ix(x) / kTileCells, ty = grid_.iy(y) / kTileCells;
+    return size_t(ty) * size_t(tiles_x_) + size_t(tx);
+  }
+
   Grid2 grid_;
   TerrainParams params_;
   std::vector<Cell> cells_;
   std::vector<uint8_t> kind_;
   std::vector<Puddle> puddles_;
-  double lipschitz_ = 1.0;
+  int tiles_x_ = 0, tiles_y_ = 0;
+  std::vector<float> tile_slope_, tile_top_;
 };
 
 }  // namespace evidential_octomap::generator
