@@ -46,8 +46,8 @@ std::vector<Mover> makeMovers(int count, double duration, const Trajectory& traj
     trajectory.planar(t_cross, &xy, &heading);
     const Eigen::Vector2d f(std::cos(heading), std::sin(heading));
     const Eigen::Vector2d cross = xy + ahead * f;
-    const double angle = (unitOf(hashOf(h, 7)) < 0.5 ? 1.0 : -1.0) *
-                         (0.87 + 1.4 * unitOf(hashOf(h, 8)));
+    const double angle =
+        (unitOf(hashOf(h, 7)) < 0.5 ? 1.0 : -1.0) * (0.87 + 1.4 * unitOf(hashOf(h, 8)));
     const double dir_heading = heading + angle;
     a.dir = Eigen::Vector2d(std::cos(dir_heading), std::sin(dir_heading));
     const double half = person ? 25.0 : 70.0;

@@ -3,10 +3,9 @@
 // path's start, walks or drives to its end and leaves the scene there. Boxes with a yaw.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "kinds.h"
 

@@ -38,13 +38,15 @@ void BorderMap::build(const Terrain& terrain, const std::vector<Primitive>& obje
         const double lx = c * dx + s * dy, ly = -s * dx + c * dy;
         bool in = false;
         switch (p.shape) {
-          case Shape::kCylinderZ: in = lx * lx + ly * ly <= double(p.half.x() * p.half.x()) + 0.06;
+          case Shape::kCylinderZ:
+            in = lx * lx + ly * ly <= double(p.half.x() * p.half.x()) + 0.06;
             break;
           case Shape::kEllipsoid:
             in = (lx * lx) / (p.half.x() * p.half.x()) + (ly * ly) / (p.half.y() * p.half.y()) <=
                  1.0;
             break;
-          default: in = std::abs(lx) <= p.half.x() + 0.25 && std::abs(ly) <= p.half.y() + 0.25;
+          default:
+            in = std::abs(lx) <= p.half.x() + 0.25 && std::abs(ly) <= p.half.y() + 0.25;
         }
         if (in) seed(1, grid_.index(i, j), cls);
       }

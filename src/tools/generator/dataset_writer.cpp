@@ -18,11 +18,17 @@ OutputSet OutputSet::parse(const std::string& list, const std::string& format) {
   o.evidence = o.logits = o.probabilities = false;
   std::stringstream ss(list);
   for (std::string item; std::getline(ss, item, ',');) {
-    if (item == "evidence") o.evidence = true;
-    else if (item == "logits") o.logits = true;
-    else if (item == "probabilities") o.probabilities = true;
-    else if (item == "all") o.evidence = o.logits = o.probabilities = true;
-    else throw std::invalid_argument("unknown output '" + item + "' (evidence, logits, probabilities, all)");
+    if (item == "evidence")
+      o.evidence = true;
+    else if (item == "logits")
+      o.logits = true;
+    else if (item == "probabilities")
+      o.probabilities = true;
+    else if (item == "all")
+      o.evidence = o.logits = o.probabilities = true;
+    else
+      throw std::invalid_argument("unknown output '" + item +
+                                  "' (evidence, logits, probabilities, all)");
   }
   if (format != "bin" && format != "npy") {
     throw std::invalid_argument("unknown format '" + format + "' (bin, npy)");
@@ -35,8 +41,7 @@ Eigen::Matrix4d kittiTr() {
   Eigen::Matrix4d Tr;
   Tr << -1.857739385241e-03, -9.999659513510e-01, -8.039975204516e-03, -4.784029760483e-03,
       -6.481465826011e-03, 8.051860151134e-03, -9.999466081774e-01, -7.337429464231e-02,
-      9.999773098287e-01, -1.805528627661e-03, -6.496203536139e-03, -3.339968064433e-01, 0, 0, 0,
-      1;
+      9.999773098287e-01, -1.805528627661e-03, -6.496203536139e-03, -3.339968064433e-01, 0, 0, 0, 1;
   return Tr;
 }
 
@@ -71,9 +76,11 @@ std::string stem(int scan) {
 }  // namespace
 
 DatasetWriter::DatasetWriter(const std::string& dir, const OutputSet& outputs, int num_classes,
-                             const std::vector<uint32_t>& raw_of_class,
-                             const KindClasses& classes)
-    : dir_(dir), outputs_(outputs), C_(num_classes), raw_of_class_(raw_of_class),
+                             const std::vector<uint32_t>& raw_of_class, const KindClasses& classes)
+    : dir_(dir),
+      outputs_(outputs),
+      C_(num_classes),
+      raw_of_class_(raw_of_class),
       classes_(classes) {
   for (const char* d : {"velodyne", "labels", "predictions"}) fs::create_directories(dir + "/" + d);
   if (outputs.evidence) fs::create_directories(dir + "/evidence");

@@ -9,12 +9,11 @@
 // Files are written to a temporary name and renamed: a killed run leaves whole files only.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <fstream>
 #include <string>
 #include <vector>
-
-#include <Eigen/Geometry>
 
 #include "agents.h"
 #include "lidar.h"

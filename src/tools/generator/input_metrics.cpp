@@ -109,11 +109,10 @@ nlohmann::json InputMetrics::toJson() const {
   j["wrong_cell_accuracy"] =
       wrong_cell_points_ ? double(wrong_cell_correct_) / wrong_cell_points_ : 0.0;
   for (int b = 0; b < kRangeBands; ++b) {
-    j["range_bands"].push_back({{"band", kBandNames[b]},
-                                {"points", band_points_[b]},
-                                {"accuracy", band_points_[b] ? double(band_correct_[b]) /
-                                                                   band_points_[b]
-                                                             : 0.0}});
+    j["range_bands"].push_back(
+        {{"band", kBandNames[b]},
+         {"points", band_points_[b]},
+         {"accuracy", band_points_[b] ? double(band_correct_[b]) / band_points_[b] : 0.0}});
   }
   for (const auto& [name, bins] : {std::pair<const char*, const Bins*>{"softmax", &softmax_},
                                    {"dirichlet_mean", &dirichlet_}}) {

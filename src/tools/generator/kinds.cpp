@@ -45,17 +45,21 @@ Family parseFamily(const std::string& name) {
 
 const char* familyName(Family f) {
   switch (f) {
-    case Family::kForest: return "forest";
-    case Family::kGrassland: return "grassland";
-    case Family::kRocky: return "rocky";
-    case Family::kFarm: return "farm";
+    case Family::kForest:
+      return "forest";
+    case Family::kGrassland:
+      return "grassland";
+    case Family::kRocky:
+      return "rocky";
+    case Family::kFarm:
+      return "farm";
   }
   return "?";
 }
 
 const std::string& classTableYaml(Family f) {
-  static const std::string tables[4] = {kClassTableForest, kClassTableGrassland,
-                                        kClassTableRocky, kClassTableFarm};
+  static const std::string tables[4] = {kClassTableForest, kClassTableGrassland, kClassTableRocky,
+                                        kClassTableFarm};
   return tables[int(f)];
 }
 

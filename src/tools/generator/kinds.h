@@ -36,9 +36,9 @@ constexpr int kNumKinds = int(Kind::kCount);
 
 struct KindInfo {
   const char* name;
-  uint32_t raw_id;             // raw label id written to labels/ (RELLIS-3D's where it has one)
-  float reflectivity;          // diffuse reflectivity at 865 nm, [0, 1]
-  float rarity;                // network model: added difficulty of the class (rare, thin)
+  uint32_t raw_id;               // raw label id written to labels/ (RELLIS-3D's where it has one)
+  float reflectivity;            // diffuse reflectivity at 865 nm, [0, 1]
+  float rarity;                  // network model: added difficulty of the class (rare, thin)
   std::array<Kind, 3> partners;  // network model: the classes it is confused with, in order
 };
 

@@ -18,8 +18,8 @@ constexpr uint32_t kMoverObject = 0x10000;
 }  // namespace
 
 double SensorModel::angularSpacing() const {
-  const double vertical = (elevation_deg.front() - elevation_deg.back()) /
-                          std::max(1, beams() - 1) * kPi / 180.0;
+  const double vertical =
+      (elevation_deg.front() - elevation_deg.back()) / std::max(1, beams() - 1) * kPi / 180.0;
   return std::sqrt(vertical * 2.0 * kPi / columns);
 }
 
@@ -39,8 +39,7 @@ SensorModel SensorModel::make(const std::string& name, int columns, double range
     s.range_sigma = 0.025;
     s.range_10pct = 45.0;
   } else {
-    throw std::invalid_argument("unknown sensor '" + name +
-                                "' (hdl-64, os1-32, os1-64, os1-128)");
+    throw std::invalid_argument("unknown sensor '" + name + "' (hdl-64, os1-32, os1-64, os1-128)");
   }
   if (columns > 0) s.columns = columns;
   if (range_sigma >= 0.0) s.range_sigma = range_sigma;
@@ -97,8 +96,8 @@ std::vector<LidarPoint> castScan(const Scene& scene, const Trajectory& trajector
     out.reserve(B);
     const double ca = std::cos(azimuth), sa = std::sin(azimuth);
     for (int b = 0; b < B; ++b) {
-      const uint64_t key = hashOf(options.seed, kStreamRay, uint64_t(scan), uint64_t(b),
-                                  uint64_t(c));
+      const uint64_t key =
+          hashOf(options.seed, kStreamRay, uint64_t(scan), uint64_t(b), uint64_t(c));
       const Eigen::Vector3d d_S(cos_el[b] * ca, cos_el[b] * sa, sin_el[b]);
       const Eigen::Vector3d d = T.linear() * d_S;
       double t_hit = sensor.max_range;
@@ -156,8 +155,8 @@ std::vector<LidarPoint> castScan(const Scene& scene, const Trajectory& trajector
         if (u_drop > std::clamp((cos_inc - 0.008) / 0.035, 0.0, 1.0)) continue;
       }
       const double echo = reflect * (0.5 + 0.5 * cos_inc);
-      const double reach = sensor.range_10pct * std::sqrt(echo / 0.1) *
-                           (1.0 + 0.08 * normalOf(hashOf(key, 3)));
+      const double reach =
+          sensor.range_10pct * std::sqrt(echo / 0.1) * (1.0 + 0.08 * normalOf(hashOf(key, 3)));
       if (t_hit > reach) continue;
       const double range = t_hit + sensor.range_sigma * normalOf(hashOf(key, kStreamNoise));
       if (range < sensor.min_range || range > sensor.max_range) continue;
@@ -165,9 +164,9 @@ std::vector<LidarPoint> castScan(const Scene& scene, const Trajectory& trajector
       LidarPoint lp;
       lp.p_W = p_W.cast<float>();
       lp.p_S = (T_end_inv * p_W).cast<float>();
-      lp.remission = float(std::clamp(reflect * (0.3 + 0.7 * cos_inc) *
-                                          (1.0 + 0.1 * normalOf(hashOf(key, kStreamRemission))),
-                                      0.0, 1.0));
+      lp.remission = float(std::clamp(
+          reflect * (0.3 + 0.7 * cos_inc) * (1.0 + 0.1 * normalOf(hashOf(key, kStreamRemission))),
+          0.0, 1.0));
       lp.range = float(range);
       lp.height = float(p_W.z() - scene.terrain.groundHeight(p_W.x(), p_W.y()));
       lp.kind = kind;

@@ -10,12 +10,11 @@
 // and stored in the end-of-sweep sensor frame, as a raw driver delivers it.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 #include "kinds.h"
 
@@ -30,8 +29,8 @@ struct SensorModel {
   std::vector<double> elevation_deg;  // per beam, top to bottom
   int columns = 1024;
   double max_range = 120.0, min_range = 1.0;
-  double range_sigma = 0.025;        // [m]
-  double range_10pct = 50.0;         // detection range of a 10 % Lambertian target [m]
+  double range_sigma = 0.025;  // [m]
+  double range_10pct = 50.0;   // detection range of a 10 % Lambertian target [m]
   double rate_hz = 10.0;
 
   int beams() const { return int(elevation_deg.size()); }
@@ -42,14 +41,14 @@ struct SensorModel {
 };
 
 struct LidarPoint {
-  Eigen::Vector3f p_S;          // measured point, end-of-sweep sensor frame
-  Eigen::Vector3f p_W;          // the same point in the world frame
+  Eigen::Vector3f p_S;  // measured point, end-of-sweep sensor frame
+  Eigen::Vector3f p_W;  // the same point in the world frame
   float remission;
-  float range;                  // measured range [m]
-  float height;                 // above the ground under it [m]
+  float range;   // measured range [m]
+  float height;  // above the ground under it [m]
   Kind kind;
-  uint32_t instance;            // mover instance (0: static)
-  uint32_t object;              // static object id, 0x10000 + instance for movers, 0 ground
+  uint32_t instance;  // mover instance (0: static)
+  uint32_t object;    // static object id, 0x10000 + instance for movers, 0 ground
   uint16_t beam, column;
 };
 

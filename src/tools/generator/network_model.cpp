@@ -45,10 +45,11 @@ std::string NetworkParams::describe() const {
     << ", border_weight " << border_weight << ", border_width " << border_width
     << " m, rare_weight " << rare_weight << ", field_sigma " << field_sigma << ", object_sigma "
     << object_sigma << ", point_sigma " << point_sigma << ", partner_gain " << partner_gain
-    << ", logit_gain " << logit_gain << ", class_noise " << class_noise << ", confidence_noise " << confidence_noise
-    << ", wrong_rate " << wrong_rate << " of " << wrong_cell << " m cells (boost " << wrong_boost
-    << "), evidence_scale " << evidence_scale << ", temperature " << temperature
-    << ", evidence activation " << (softplus ? "softplus" : "exp");
+    << ", logit_gain " << logit_gain << ", class_noise " << class_noise << ", confidence_noise "
+    << confidence_noise << ", wrong_rate " << wrong_rate << " of " << wrong_cell
+    << " m cells (boost " << wrong_boost << "), evidence_scale " << evidence_scale
+    << ", temperature " << temperature << ", evidence activation "
+    << (softplus ? "softplus" : "exp");
   return s.str();
 }
 
@@ -85,8 +86,8 @@ NetworkOutput NetworkModel::run(const Scene& scene, const std::vector<LidarPoint
       if (ground != g && ground > 0) d_border = std::max(0.0, double(pt.height)), other = ground;
     }
     const double border = std::exp(-d_border / p_.border_width);
-    const int partner = (other > 0 && d_border < 2.0 * p_.border_width) ? other
-                                                                        : classes_.partner[int(pt.kind)];
+    const int partner =
+        (other > 0 && d_border < 2.0 * p_.border_width) ? other : classes_.partner[int(pt.kind)];
     const double spacing = pt.range * spacing_ / kSpacingRef;
     const double field = 2.5 * valueNoise3(field_key, x / 3.0, y / 3.0, z / 3.0);
     const double object = normalOf(hashOf(field_key, 7, pt.object));
@@ -95,10 +96,11 @@ NetworkOutput NetworkModel::run(const Scene& scene, const std::vector<LidarPoint
                      p_.object_sigma * (pt.object ? object : 0.0) +
                      p_.point_sigma * normalOf(hashOf(key, 1));
     // 1 m world blocks: the part of the class noise every scan shares.
-    const uint64_t block = hashOf(field_key, 8, uint64_t(int64_t(std::floor(x))),
-                                  uint64_t(int64_t(std::floor(y))), uint64_t(int64_t(std::floor(z))));
-    const double shared = p_.confidence_noise *
-                          (0.6 * normalOf(hashOf(block, 9)) + 0.8 * normalOf(hashOf(key, 2)));
+    const uint64_t block =
+        hashOf(field_key, 8, uint64_t(int64_t(std::floor(x))), uint64_t(int64_t(std::floor(y))),
+               uint64_t(int64_t(std::floor(z))));
+    const double shared =
+        p_.confidence_noise * (0.6 * normalOf(hashOf(block, 9)) + 0.8 * normalOf(hashOf(key, 2)));
     float* zl = out.logits.data() + i * C;
     for (int c = 0; c < C; ++c) {
       const double eta = 0.7071 * (normalOf(hashOf(block, 10, c)) + normalOf(hashOf(key, 3, c)));
@@ -107,11 +109,14 @@ NetworkOutput NetworkModel::run(const Scene& scene, const std::vector<LidarPoint
     zl[0] = float(-4.0 + 0.5 * normalOf(hashOf(key, 4)));  // void: the net never predicts it
     if (g > 0) zl[g] = float(p_.margin - D);
     if (partner > 0 && partner != g) zl[partner] += float(p_.partner_gain * std::max(D, 0.0));
-    const bool wrong = partner > 0 && partner != g && wrongCell(x, y, z);
+    // In a wrong cell the class's usual partner wins (not the border's: the same wrong class
+    // for every point of the class in the cell, in every scan).
+    const int usual = classes_.partner[int(pt.kind)];
+    const bool wrong = usual > 0 && usual != g && wrongCell(x, y, z);
     out.in_wrong_cell[i] = wrong;
     if (wrong) {
-      zl[partner] = std::max(zl[g], zl[partner]) +
-                    float(p_.wrong_boost + 0.3 * std::abs(normalOf(hashOf(key, 5))));
+      zl[usual] = std::max(zl[g], zl[partner > 0 ? partner : usual]) +
+                  float(p_.wrong_boost + 0.3 * std::abs(normalOf(hashOf(key, 5))));
     }
     int arg = 0;
     for (int c = 0; c < C; ++c) {
@@ -122,8 +127,8 @@ NetworkOutput NetworkModel::run(const Scene& scene, const std::vector<LidarPoint
     float* ev = out.evidence.data() + i * C;
     for (int c = 0; c < C; ++c) {
       const double v = zl[c];
-      const double a = p_.softplus ? (v > 20.0 ? v : std::log1p(std::exp(v)))
-                                   : std::exp(std::min(v, 15.0));
+      const double a =
+          p_.softplus ? (v > 20.0 ? v : std::log1p(std::exp(v))) : std::exp(std::min(v, 15.0));
       ev[c] = float(p_.evidence_scale * a);
       zl[c] = float(v / p_.temperature);
     }

@@ -37,21 +37,21 @@ struct NetworkParams {
   double margin = 4.5;
   double range_weight = 1.6;
   double border_weight = 2.6;
-  double border_width = 0.5;     // [m]
+  double border_width = 0.5;  // [m]
   double rare_weight = 1.0;
   double field_sigma = 0.7;
   double object_sigma = 0.5;
   double point_sigma = 0.7;
   double partner_gain = 0.5;
-  double logit_gain = 1.7;       // scales every logit: confidence without changing the argmax
+  double logit_gain = 1.7;  // scales every logit: confidence without changing the argmax
   double class_noise = 0.9;
   double confidence_noise = 0.2;
   double wrong_rate = 0.01;
-  double wrong_cell = 4.0;       // [m]
+  double wrong_cell = 4.0;  // [m]
   double wrong_boost = 1.5;
-  double evidence_scale = 1.0;   // the factor the map is not told
+  double evidence_scale = 1.0;  // the factor the map is not told
   double temperature = 1.0;
-  bool softplus = false;         // evidence activation: exp (default) or softplus
+  bool softplus = false;  // evidence activation: exp (default) or softplus
 
   // good, poor, overconfident, underconfident; throws on unknown names.
   static NetworkParams preset_named(const std::string& name);
@@ -59,8 +59,8 @@ struct NetworkParams {
 };
 
 struct NetworkOutput {
-  std::vector<float> logits;   // N x C, already divided by the temperature
-  std::vector<float> evidence; // N x C
+  std::vector<float> logits;       // N x C, already divided by the temperature
+  std::vector<float> evidence;     // N x C
   std::vector<int> gt, predicted;  // class ids
   std::vector<uint8_t> in_wrong_cell;
 };

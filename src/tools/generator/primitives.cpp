@@ -10,8 +10,10 @@ namespace evidential_octomap::generator {
 
 float Primitive::radiusXY() const {
   switch (shape) {
-    case Shape::kCylinderZ: return half.x();
-    default: return std::hypot(half.x(), half.y());
+    case Shape::kCylinderZ:
+      return half.x();
+    default:
+      return std::hypot(half.x(), half.y());
   }
 }
 void Primitive::setYaw(float y) {
@@ -121,7 +123,8 @@ void ObjectGrid::build(const std::vector<Primitive>* prims, const Grid2& extent)
     const Primitive& p = (*prims)[k];
     forCells(p, [&](size_t c) {
       items_[fill[c]++] = k;
-      cell_top_[c] = std::max(cell_top_[c], p.zmax() + (p.shape == Shape::kEllipsoid ? 0.0f : 0.5f));
+      cell_top_[c] =
+          std::max(cell_top_[c], p.zmax() + (p.shape == Shape::kEllipsoid ? 0.0f : 0.5f));
     });
   }
 }

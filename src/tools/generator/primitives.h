@@ -4,10 +4,9 @@
 // hash of the ray and the object) and passes through when that path is longer than its chord.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "grid2.h"
 #include "kinds.h"
@@ -19,13 +18,13 @@ enum class Shape : uint8_t { kCylinderZ, kCylinderX, kEllipsoid, kBox };
 struct Primitive {
   Shape shape;
   Kind kind;
-  float density = 0.0f;   // porous foliage: returns per metre of chord (0: solid)
+  float density = 0.0f;  // porous foliage: returns per metre of chord (0: solid)
   Eigen::Vector3f centre;
-  Eigen::Vector3f half;   // half extents in the object frame (cylinder: radius, radius, half length
-                          // along its axis for kCylinderZ; half length, radius, radius for X)
+  Eigen::Vector3f half;  // half extents in the object frame (cylinder: radius, radius, half length
+                         // along its axis for kCylinderZ; half length, radius, radius for X)
   float yaw = 0.0f;
   float cos_yaw = 1.0f, sin_yaw = 0.0f;  // of yaw; setYaw() keeps them in step
-  uint32_t id = 0;        // object id (network model's per-object correlation); index + 1
+  uint32_t id = 0;  // object id (network model's per-object correlation); index + 1
   float reflectivity = 0.3f;
 
   void setYaw(float y);
@@ -40,7 +39,7 @@ struct Primitive {
 
 struct ObjectHit {
   double t;
-  uint32_t index;          // into the primitive list
+  uint32_t index;  // into the primitive list
   Eigen::Vector3f normal;
   bool porous;
 };

@@ -67,8 +67,8 @@ class Placer {
     const double crown_base = (conifer ? 1.2 + 1.5 * u(h, 14) : 2.0 + 2.5 * u(h, 14)) * scale;
     const double top = crown_base + 2.0 * crown_h * 0.9;
     const float jitter = float(u(h, 15) - 0.5) * 0.3f;
-    add(Shape::kCylinderZ, Kind::kTree, {x, y, g + 0.5 * top - 0.3}, {trunk_r, trunk_r, 0.5 * top + 0.3},
-        0.0, 0.0f, jitter);
+    add(Shape::kCylinderZ, Kind::kTree, {x, y, g + 0.5 * top - 0.3},
+        {trunk_r, trunk_r, 0.5 * top + 0.3}, 0.0, 0.0f, jitter);
     add(Shape::kEllipsoid, Kind::kTree, {x, y, g + crown_base + crown_h},
         {crown_r, crown_r * (0.85 + 0.3 * u(h, 16)), crown_h}, kTwoPi * u(h, 17),
         float(0.3 + 0.6 * u(h, 18)), jitter);
@@ -115,12 +115,10 @@ void placeGrassland(Scene*, Placer& P, double w) {
 }
 
 void placeRocky(Scene*, Placer& P, double w) {
-  P.scatter(4, 10.0, 0.45, w + 1.5, [&](double x, double y, uint64_t h) {
-    P.rock(x, y, h, Kind::kBoulder, 0.9, 2.6);
-  });
-  P.scatter(5, 3.0, 0.5, w + 0.3, [&](double x, double y, uint64_t h) {
-    P.rock(x, y, h, Kind::kRock, 0.15, 0.55);
-  });
+  P.scatter(4, 10.0, 0.45, w + 1.5,
+            [&](double x, double y, uint64_t h) { P.rock(x, y, h, Kind::kBoulder, 0.9, 2.6); });
+  P.scatter(5, 3.0, 0.5, w + 0.3,
+            [&](double x, double y, uint64_t h) { P.rock(x, y, h, Kind::kRock, 0.15, 0.55); });
   P.scatter(2, 9.0, 0.3, w + 0.5, [&](double x, double y, uint64_t h) { P.bush(x, y, h); });
   P.scatter(1, 20.0, 0.3, w + 1.5, [&](double x, double y, uint64_t h) { P.tree(x, y, h, 0.8); });
 }
@@ -187,8 +185,9 @@ void placeFarm(Scene* s, Placer& P, double w, const Route& route, double a0, dou
 
 }  // namespace
 
-std::unique_ptr<Scene> Scene::build(Family family, uint64_t seed, const Route& route, double max_arc,
-                   double margin, const std::vector<Mover>& movers, const KindClasses& classes) {
+std::unique_ptr<Scene> Scene::build(Family family, uint64_t seed, const Route& route,
+                                    double max_arc, double margin, const std::vector<Mover>& movers,
+                                    const KindClasses& classes) {
   auto owned = std::make_unique<Scene>();
   Scene& s = *owned;
   s.family = family;
@@ -207,18 +206,26 @@ std::unique_ptr<Scene> Scene::build(Family family, uint64_t seed, const Route& r
     a0 = -60.0, a1 = max_arc + 60.0;
     if (a1 - a0 > route.length) a0 = 0.0, a1 = route.length;
   }
-  s.path = PathField::make(route, a0, a1,
-                           Grid2::covering(xmin - margin, ymin - margin, xmax + margin,
-                                           ymax + margin, 0.5));
+  s.path = PathField::make(
+      route, a0, a1,
+      Grid2::covering(xmin - margin, ymin - margin, xmax + margin, ymax + margin, 0.5));
   s.terrain = Terrain::build(family, seed, s.extent, route, s.path);
   const uint64_t key = hashOf(seed, kStreamObjects);
   Placer P(&s, movers, key);
   const double w = s.terrain.params().trail_half_width;
   switch (family) {
-    case Family::kForest: placeForest(&s, P, w); break;
-    case Family::kGrassland: placeGrassland(&s, P, w); break;
-    case Family::kRocky: placeRocky(&s, P, w); break;
-    case Family::kFarm: placeFarm(&s, P, w, route, a0, a1, key); break;
+    case Family::kForest:
+      placeForest(&s, P, w);
+      break;
+    case Family::kGrassland:
+      placeGrassland(&s, P, w);
+      break;
+    case Family::kRocky:
+      placeRocky(&s, P, w);
+      break;
+    case Family::kFarm:
+      placeFarm(&s, P, w, route, a0, a1, key);
+      break;
   }
   s.object_grid.build(&s.objects, s.extent);
   int C = 0;

@@ -32,8 +32,9 @@ struct Scene {
 
   // The part of the world within `margin` metres of the route's first `max_arc` metres.
   // Built in place (the object grid points into `objects`).
-  static std::unique_ptr<Scene> build(Family family, uint64_t seed, const Route& route, double max_arc,
-                     double margin, const std::vector<Mover>& movers, const KindClasses& classes);
+  static std::unique_ptr<Scene> build(Family family, uint64_t seed, const Route& route,
+                                      double max_arc, double margin,
+                                      const std::vector<Mover>& movers, const KindClasses& classes);
 };
 
 }  // namespace evidential_octomap::generator

@@ -24,7 +24,8 @@ PathField PathField::make(const Route& route, double a0, double a1, const Grid2&
     const Eigen::Vector2d p = route.at(a);
     double arc = route.kind == RouteKind::kLoop ? std::fmod(a, route.length) : a;
     if (arc < 0.0) arc += route.length;
-    if (p.x() < grid.x0 - kMax || p.y() < grid.y0 - kMax || p.x() > grid.x0 + grid.nx * grid.res + kMax ||
+    if (p.x() < grid.x0 - kMax || p.y() < grid.y0 - kMax ||
+        p.x() > grid.x0 + grid.nx * grid.res + kMax ||
         p.y() > grid.y0 + grid.ny * grid.res + kMax) {
       continue;
     }
@@ -148,8 +149,7 @@ Terrain Terrain::build(Family family, uint64_t seed, const Grid2& grid, const Ro
   if (P.puddle_cells > 0.0) {
     const double cell = 25.0;
     for (int j = int(std::floor(grid.y0 / cell)); j * cell < grid.y0 + grid.ny * grid.res; ++j) {
-      for (int i = int(std::floor(grid.x0 / cell)); i * cell < grid.x0 + grid.nx * grid.res;
-           ++i) {
+      for (int i = int(std::floor(grid.x0 / cell)); i * cell < grid.x0 + grid.nx * grid.res; ++i) {
         const uint64_t h = hashOf(key, 5, uint64_t(i), uint64_t(j));
         if (unitOf(h) > P.puddle_cells) continue;
         const Eigen::Vector2d c((i + unitOf(hashOf(h, 1))) * cell,
@@ -174,8 +174,7 @@ Terrain Terrain::build(Family family, uint64_t seed, const Grid2& grid, const Ro
       const double w = 1.0 - smoothstep(trail_w, trail_w + 2.5, d);
       if (w > 0.0) {
         const size_t k = std::min(size_t(path.arc[pc] / route.step), profile.size() - 1);
-        const double trail_h = profile[k] + 0.3 * P.roughness *
-                                                fbm2(hashOf(key, 3), x, y, 2.0, 3);
+        const double trail_h = profile[k] + 0.3 * P.roughness * fbm2(hashOf(key, 3), x, y, 2.0, 3);
         h = h + (trail_h - h) * w;
       }
       Kind kind = Kind::kGrass;

@@ -3,10 +3,9 @@
 // mud around them, a grass layer of varying height, and the ground kind of every cell.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "grid2.h"
 #include "kinds.h"
@@ -28,12 +27,12 @@ struct PathField {
 };
 
 struct TerrainParams {
-  double grade = 0.05;          // slope of the underlying plane (rise over run)
-  double hills = 2.0;           // amplitude of the 60 m undulation [m]
-  double roughness = 0.05;      // amplitude of the 2 m roughness [m]
+  double grade = 0.05;      // slope of the underlying plane (rise over run)
+  double hills = 2.0;       // amplitude of the 60 m undulation [m]
+  double roughness = 0.05;  // amplitude of the 2 m roughness [m]
   double trail_half_width = 1.3;
-  double puddles_per_100m = 1.0;     // on the trail
-  double puddle_cells = 0.0;         // off-trail puddles: probability per 25 m cell
+  double puddles_per_100m = 1.0;  // on the trail
+  double puddle_cells = 0.0;      // off-trail puddles: probability per 25 m cell
   static TerrainParams of(Family f);
 };
 
@@ -60,8 +59,8 @@ class Terrain {
   // First crossing of the ray o + t d (t in (0, tmax]) with the surface height + grass_fraction
   // times the grass height (each ray sees the grass layer's top at its own depth: a porous
   // layer). Sphere tracing with local Lipschitz bounds, then bisection.
-  bool march(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tmax,
-             float grass_fraction, double* t) const;
+  bool march(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tmax, float grass_fraction,
+             double* t) const;
 
  private:
   struct Cell {

@@ -18,9 +18,12 @@ RouteKind parseRoute(const std::string& name) {
 
 const char* routeName(RouteKind r) {
   switch (r) {
-    case RouteKind::kLoop: return "loop";
-    case RouteKind::kOutAndBack: return "out-and-back";
-    case RouteKind::kLine: return "line";
+    case RouteKind::kLoop:
+      return "loop";
+    case RouteKind::kOutAndBack:
+      return "out-and-back";
+    case RouteKind::kLine:
+      return "line";
   }
   return "?";
 }

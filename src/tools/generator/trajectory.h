@@ -5,12 +5,11 @@
 //   line          an open winding path, never revisited.
 #pragma once
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
-#include <Eigen/Geometry>
 
 namespace evidential_octomap::generator {
 
@@ -24,7 +23,7 @@ struct Route {
   RouteKind kind = RouteKind::kLoop;
   std::vector<Eigen::Vector2d> xy;  // samples every `step` metres along the path
   double step = 0.5;
-  double length = 0.0;              // path length [m]
+  double length = 0.0;  // path length [m]
 
   // Position and unit tangent at arc length s (clamped, or wrapped for a loop).
   Eigen::Vector2d at(double s) const;
