@@ -106,21 +106,12 @@ std::vector<LidarPoint> castScan(const Scene& scene, const Trajectory& trajector
       uint32_t instance = 0, object = 0;
       float reflect = 0.0f, cos_inc = 1.0f;
       bool porous = false;
-      // Ground, then static objects before it, then movers before both.
+      // The ground march and the object grid walk are the costly parts; each stops at the
+      // other's hit. Rays going down meet the ground first more often, rays going up objects.
       const float grass_fraction = float(unitOf(hashOf(key, 1)));
-      double t;
-      if (scene.terrain.march(o, d, sensor.max_range, grass_fraction, &t)) {
-        const Eigen::Vector3d p = o + t * d;
-        hit = true;
-        t_hit = t;
-        kind = scene.terrain.kindAt(p.x(), p.y());
-        reflect = kindInfo(kind).reflectivity;
-        const bool in_grass = scene.terrain.grassHeight(p.x(), p.y()) > 0.03f;
-        porous = in_grass;  // blades: random orientation
-        cos_inc = float(std::abs(d.dot(scene.terrain.normal(p.x(), p.y()).cast<double>())));
-      }
-      ObjectHit oh;
-      if (scene.object_grid.cast(o, d, t_hit, key, &oh) && oh.t < t_hit) {
+      auto castObjects = [&] {
+        ObjectHit oh;
+        if (!scene.object_grid.cast(o, d, t_hit, key, &oh)) return;
         const Primitive& p = scene.objects[oh.index];
         hit = true;
         t_hit = oh.t;
@@ -129,6 +120,26 @@ std::vector<LidarPoint> castScan(const Scene& scene, const Trajectory& trajector
         reflect = p.reflectivity;
         porous = oh.porous;
         cos_inc = float(std::abs(d.cast<float>().dot(oh.normal)));
+      };
+      auto castGround = [&] {
+        double t;
+        if (!scene.terrain.march(o, d, t_hit, grass_fraction, &t)) return;
+        const Eigen::Vector3d p = o + t * d;
+        hit = true;
+        t_hit = t;
+        kind = scene.terrain.kindAt(p.x(), p.y());
+        reflect = kindInfo(kind).reflectivity;
+        object = 0;
+        // Grass blades have random orientations.
+        porous = scene.terrain.grassHeight(p.x(), p.y()) > 0.03f;
+        cos_inc = float(std::abs(d.dot(scene.terrain.normal(p.x(), p.y()).cast<double>())));
+      };
+      if (d.z() < 0.0) {
+        castGround();
+        castObjects();
+      } else {
+        castObjects();
+        castGround();
       }
       for (size_t k = 0; k < boxes.size(); ++k) {
         double t0, t1;

@@ -20,6 +20,7 @@ void Primitive::setYaw(float y) {
   yaw = y;
   cos_yaw = float(std::cos(double(y)));
   sin_yaw = float(std::sin(double(y)));
+  bound = shape == Shape::kEllipsoid ? half.maxCoeff() : half.norm();
 }
 
 float Primitive::zmin() const { return centre.z() - half.z(); }
@@ -27,9 +28,15 @@ float Primitive::zmax() const { return centre.z() + half.z(); }
 
 bool Primitive::intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tmax,
                           double* t0, double* t1, Eigen::Vector3f* normal) const {
+  const double px = o.x() - centre.x(), py = o.y() - centre.y(), pz = o.z() - centre.z();
+  // Bounding sphere first: most candidates of a grid cell are missed.
+  const double along = -(px * d.x() + py * d.y() + pz * d.z());
+  const double miss2 = px * px + py * py + pz * pz - along * along;
+  if (miss2 > double(bound) * bound || along < -double(bound) || along > tmax + bound) {
+    return false;
+  }
   // Into the object frame: translate, rotate by -yaw.
   const double c = cos_yaw, s = sin_yaw;
-  const double px = o.x() - centre.x(), py = o.y() - centre.y(), pz = o.z() - centre.z();
   const Eigen::Vector3d p(c * px + s * py, -s * px + c * py, pz);
   const Eigen::Vector3d v(c * d.x() + s * d.y(), -s * d.x() + c * d.y(), d.z());
   const Eigen::Vector3d h = half.cast<double>();

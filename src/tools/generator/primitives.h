@@ -24,9 +24,11 @@ struct Primitive {
                          // along its axis for kCylinderZ; half length, radius, radius for X)
   float yaw = 0.0f;
   float cos_yaw = 1.0f, sin_yaw = 0.0f;  // of yaw; setYaw() keeps them in step
+  float bound = 0.0f;                    // bounding sphere radius; setYaw() sets it
   uint32_t id = 0;  // object id (network model's per-object correlation); index + 1
   float reflectivity = 0.3f;
 
+  // Sets the yaw (and the cached cos, sin and bounding radius: call after setting `half`).
   void setYaw(float y);
   // Entry and exit of the ray (o, unit d) in [0, tmax]; the outward normal at entry.
   bool intersect(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double tmax, double* t0,

@@ -259,6 +259,7 @@ Terrain Terrain::build(Family family, uint64_t seed, const Grid2& grid, const Ro
       }
       T.tile_slope_[t] = 1.05f * T.tile_slope_[t] + 0.01f;
       L = std::max(L, double(T.tile_slope_[t]));
+      T.top_ = std::max(T.top_, double(T.tile_top_[t]));
     }
   }
   if (std::getenv("GEN_DEBUG")) std::fprintf(stderr, "terrain max local slope bound %.3f\n", L);
@@ -301,8 +302,18 @@ bool Terrain::march(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t
   double f = o.z() - surface(o.x(), o.y(), grass_fraction);
   if (f <= 0.0) return false;  // the sensor is under the surface: nothing sensible to return
   double t = 0.0;
-  Eigen::Vector3d p = o;
+  if (o.z() > top_) {
+    if (d.z() >= 0.0) return false;  // above everything and rising: sky
+    t = (o.z() - top_) / -d.z();     // straight down to the highest surface's level
+    if (t > tmax) return false;
+  }
+  Eigen::Vector3d p = o + t * d;
+  if (t > 0.0) {
+    if (!grid_.inside(p.x(), p.y())) return false;
+    f = p.z() - surface(p.x(), p.y(), grass_fraction);
+  }
   while (true) {
+    if (d.z() >= 0.0 && p.z() > top_) return false;
     const size_t k = tileOf(p.x(), p.y());
     const double L = tile_slope_[k];
     // Sphere tracing with the local Lipschitz bound, or a free step while the ray stays above
@@ -311,7 +322,9 @@ bool Terrain::march(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t
     double step = rate > 0.0 ? f / rate : max_step;
     const double above = p.z() - tile_top_[k];
     if (above > 0.0) step = std::max(step, d.z() >= 0.0 ? max_step : above / -d.z());
-    step = std::clamp(step, 0.03, max_step);
+    // The shortest step grows with range (0.2 m at 50 m): a crest thinner than that may be
+    // stepped over, far below the point spacing there.
+    step = std::clamp(step, std::max(0.03, 0.004 * t), max_step);
     const double t_next = t + step;
     if (t_next > tmax) return false;
     p = o + t_next * d;

@@ -82,6 +82,7 @@ class Terrain {
   std::vector<Puddle> puddles_;
   int tiles_x_ = 0, tiles_y_ = 0;
   std::vector<float> tile_slope_, tile_top_;
+  double top_ = -1e30;  // highest surface of all
 };
 
 }  // namespace evidential_octomap::generator
