@@ -67,27 +67,36 @@ def load_table(data):
 def topdown(args):
     names, colors, lut = load_table(args.data)
     xyz, raw, poses = load_points(args.data, every=args.every)
-    cls = np.array([lut[int(r)] for r in np.unique(raw)])
-    cls_of = dict(zip(np.unique(raw), cls))
-    c = np.vectorize(cls_of.get)(raw)
-    # Draw low points first so canopies and objects sit on top, as seen from above.
-    order = np.argsort(xyz[:, 2])
-    xyz, c = xyz[order], c[order]
-    fig, ax = plt.subplots(figsize=(8, 8), dpi=110)
-    ax.set_facecolor("black")
-    ax.scatter(xyz[:, 0], xyz[:, 1], s=0.15, c=colors[c], marker=".", linewidths=0)
+    lut_arr = np.zeros(int(raw.max()) + 1, dtype=int)
+    for r, c in lut.items():
+        if r < len(lut_arr):
+            lut_arr[r] = c
+    cls = lut_arr[raw]
     traj = np.array([p[:3, 3] for p in poses])
-    ax.plot(traj[:, 0], traj[:, 1], color="white", lw=0.8, label="trajectory")
-    ax.set_aspect("equal")
-    if args.extent:
-        cx, cy = traj[:, 0].mean(), traj[:, 1].mean()
-        ax.set_xlim(cx - args.extent, cx + args.extent)
-        ax.set_ylim(cy - args.extent, cy + args.extent)
+    cx, cy = traj[:, 0].mean(), traj[:, 1].mean()
+    half = args.extent or max(np.ptp(xyz[:, 0]), np.ptp(xyz[:, 1])) / 2
+    res = args.resolution
+    n = int(2 * half / res)
+    i = ((xyz[:, 0] - (cx - half)) / res).astype(int)
+    j = ((xyz[:, 1] - (cy - half)) / res).astype(int)
+    ok = (i >= 0) & (i < n) & (j >= 0) & (j < n)
+    i, j, z, cls = i[ok], j[ok], xyz[ok, 2], cls[ok]
+    # As seen from above: each pixel shows the class of its highest point.
+    order = np.argsort(z)
+    img = np.zeros((n, n, 3))
+    img[j[order], i[order]] = colors[cls[order]]
+    fig, ax = plt.subplots(figsize=(7.5, 7.5), dpi=110)
+    ax.imshow(img, origin="lower", extent=(cx - half, cx + half, cy - half, cy + half),
+              interpolation="nearest")
+    ax.plot(traj[:, 0], traj[:, 1], color="white", lw=0.8)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    present = sorted(set(c.tolist()))
-    handles = [plt.Line2D([], [], marker="s", ls="", color=colors[k], label=names[k]) for k in present]
-    ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.8)
+    present = sorted(set(cls.tolist()))
+    handles = [plt.Line2D([], [], marker="s", ls="", color=colors[k], label=names[k])
+               for k in present]
+    handles.append(plt.Line2D([], [], color="white", label="trajectory"))
+    leg = ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.85)
+    leg.get_frame().set_facecolor("#dddddd")
     ax.set_title(args.title or "SYNTHETIC", fontsize=10)
     if args.stamp:
         fig.text(0.01, 0.005, args.stamp, fontsize=7, color="gray")
@@ -131,6 +140,7 @@ def main():
     t.add_argument("out")
     t.add_argument("--every", type=int, default=1, help="use every k-th scan")
     t.add_argument("--extent", type=float, default=0.0, help="half width of the view [m]")
+    t.add_argument("--resolution", type=float, default=0.2, help="pixel size [m]")
     t.add_argument("--title", default="")
     t.add_argument("--stamp", default="")
     r = sub.add_parser("reliability")

@@ -49,10 +49,10 @@ std::string readAll(const std::string& path) {
   return s.str();
 }
 
-// The tiny scene all tests share: a forest, 512 columns, 12 scans (1.2 s), 4 movers, a higher
+// The tiny scene the tests share: a forest, 512 columns, 12 scans (1.2 s), 4 movers, a higher
 // share of wrong cells than the preset (more of them to measure).
 const char* kTinyArgs =
-    "generate --scene forest --sensor os1-64 --columns 512 --scans 12 --movers 4 "
+    "generate --scene forest --sensor os1-64 --columns 512 --movers 4 "
     "--wrong-rate 0.05 --outputs all -q";
 
 g::WorldOptions tinyWorldOptions() {
@@ -78,7 +78,7 @@ std::string dataset(const std::string& name, const std::string& extra) {
   made[name] = dir;
   return dir;
 }
-std::string tiny() { return dataset("tiny", "--seed 7 --threads 1"); }
+std::string tiny() { return dataset("tiny", "--seed 7 --scans 12 --threads 1"); }
 
 struct Loaded {
   ClassTable classes;
@@ -117,7 +117,7 @@ struct Rate {
 }  // namespace
 
 TEST(Generator, SameSeedGivesByteIdenticalDatasetOnOneAndTwoThreads) {
-  const std::string a = tiny(), b = dataset("tiny_2threads", "--seed 7 --threads 2");
+  const std::string a = tiny(), b = dataset("tiny_2threads", "--seed 7 --scans 12 --threads 2");
   size_t files = 0;
   for (const auto& entry : fs::recursive_directory_iterator(a)) {
     if (!entry.is_regular_file()) continue;
@@ -141,7 +141,7 @@ TEST(Generator, SameSeedGivesByteIdenticalDatasetOnOneAndTwoThreads) {
 }
 
 TEST(Generator, DifferentSeedGivesADifferentScene) {
-  const std::string a = tiny(), c = dataset("seed8", "--seed 8");
+  const std::string a = tiny(), c = dataset("seed8", "--seed 8 --scans 12");
   EXPECT_NE(readAll(a + "/velodyne/000000.bin"), readAll(c + "/velodyne/000000.bin"));
 }
 
@@ -313,6 +313,8 @@ TEST(Generator, ConsistentlyWrongCellsAreWrongInEveryScanWithTheSameClass) {
   const g::KindClasses kc = g::KindClasses::of(l->classes);
   const g::NetworkModel model(p, kc, l->classes.numClasses(), 0.0, 7);
   Rate inside, outside;
+  const int C = l->classes.numClasses();
+  double u_inside = 0.0, u_wrong_outside = 0.0;  // sums of the vacuity u = C / S
   // (cell, true class) -> predicted class -> count, and the scans it was seen in.
   std::map<std::tuple<int64_t, int64_t, int64_t, int>, std::map<int, size_t>> votes;
   std::map<std::tuple<int64_t, int64_t, int64_t, int>, std::set<size_t>> seen_in;
@@ -322,11 +324,15 @@ TEST(Generator, ConsistentlyWrongCellsAreWrongInEveryScanWithTheSameClass) {
       if (scan.gt[i] <= 0) continue;
       const Eigen::Vector3f q = scan.pointW(i);
       const bool wrong = scan.predicted[i] != scan.gt[i];
+      double S = C;
+      for (int c = 0; c < C; ++c) S += scan.evidence[i * C + c];
       if (!model.wrongCell(q.x(), q.y(), q.z())) {
         outside.add(wrong);
+        if (wrong) u_wrong_outside += C / S;
         continue;
       }
       inside.add(wrong);
+      u_inside += C / S;
       const auto key = std::make_tuple(int64_t(std::floor(q.x() / p.wrong_cell)),
                                        int64_t(std::floor(q.y() / p.wrong_cell)),
                                        int64_t(std::floor(q.z() / p.wrong_cell)), scan.gt[i]);
@@ -337,6 +343,8 @@ TEST(Generator, ConsistentlyWrongCellsAreWrongInEveryScanWithTheSameClass) {
   ASSERT_GT(inside.n, 2000u);
   EXPECT_GT(inside.value(), 0.9);
   EXPECT_LT(outside.value(), 0.3);
+  // Confidently wrong: less vacuity than the network's other errors.
+  EXPECT_LT(u_inside / inside.n, 0.7 * u_wrong_outside / outside.wrong);
   // Seen in several scans, a cell's points of one class get one and the same wrong class.
   size_t cells = 0, consistent = 0;
   for (const auto& [key, v] : votes) {
@@ -432,7 +440,7 @@ TEST(Generator, GroundPointsAtClassBordersAreConfusedMore) {
 }
 
 TEST(Generator, EvidenceScalesWithTheEvidenceScaleAndPredictionsDoNot) {
-  const std::string a = tiny(), b = dataset("scale4", "--seed 7 --evidence-scale 4");
+  const std::string a = tiny(), b = dataset("scale4", "--seed 7 --scans 12 --evidence-scale 4");
   const auto x = load(a), y = load(b);
   ASSERT_EQ(x->scans.size(), y->scans.size());
   for (size_t s = 0; s < x->scans.size(); ++s) {
@@ -483,4 +491,40 @@ TEST(Generator, MapReadsTheGeneratedEvidence) {
       << log;
   EXPECT_TRUE(fs::exists(out + "/map.ot"));
   EXPECT_TRUE(fs::exists(out + "/metrics.json"));
+}
+
+TEST(Generator, MotionDistortedPointsAreStoredInTheEndOfSweepFrame) {
+  // At 5 m/s a sweep moves the sensor 0.5 m: trunk points must still lie on their trunks when
+  // read through the end-of-sweep pose, and differ from the undistorted sweep.
+  const std::string args = "--seed 11 --scans 3 --speed 5 --threads 2";
+  const std::string a = dataset("distorted", args + " --motion-distortion");
+  const std::string b = dataset("undistorted", args);
+  EXPECT_NE(readAll(a + "/velodyne/000002.bin"), readAll(b + "/velodyne/000002.bin"));
+  const auto l = load(a);
+  g::WorldOptions o = tinyWorldOptions();
+  o.seed = 11;
+  o.scans = 3;
+  o.speed = 5.0;
+  const auto world = g::World::make(o, l->classes);
+  const int tree = classNamed(l->classes, "tree");
+  std::vector<const g::Primitive*> trunks;
+  for (const g::Primitive& p : world->scene->objects)
+    if (p.kind == g::Kind::kTree && p.shape == g::Shape::kCylinderZ) trunks.push_back(&p);
+  size_t n = 0, on = 0;
+  for (const Scan& scan : l->scans) {
+    for (size_t i = 0; i < scan.size(); ++i) {
+      if (scan.gt[i] != tree || scan.points_S[i].norm() > 25.0) continue;
+      const Eigen::Vector3f p = scan.pointW(i);
+      if (p.z() - world->scene->terrain.groundHeight(p.x(), p.y()) > 1.0) continue;  // trunk
+      double best = 1e9, radius = 0.0;
+      for (const g::Primitive* t : trunks) {
+        const double d = (p.head<2>() - t->centre.head<2>()).norm();
+        if (d - t->half.x() < best - radius) best = d, radius = t->half.x();
+      }
+      ++n;
+      on += std::abs(best - radius) < 0.1;
+    }
+  }
+  ASSERT_GT(n, 200u);
+  EXPECT_GT(double(on) / n, 0.95);
 }
