@@ -173,6 +173,29 @@ TEST(Generator, EveryFamilyWritesADatasetItsOwnClassTableReads) {
   }
 }
 
+TEST(Generator, EveryKindAFamilyPlacesHasAClassInItsTable) {
+  for (const std::string family : {"forest", "grassland", "rocky", "farm"}) {
+    const ClassTable t = ClassTable::load(std::string(EVIDENTIAL_TEST_CONFIG_DIR) +
+                                          "/classes_offroad_" + family + ".yaml");
+    g::WorldOptions o;
+    o.family = g::parseFamily(family);
+    o.scans = 2000;  // 400 m: the whole loop, its puddles, fences and buildings
+    o.seed = 3;
+    const auto world = g::World::make(o, t);
+    std::set<g::Kind> kinds;
+    const g::Grid2& e = world->scene->extent;
+    for (int j = 0; j < e.ny; j += 2)
+      for (int i = 0; i < e.nx; i += 2)
+        kinds.insert(world->scene->terrain.kindAt(e.cx(i), e.cy(j)));
+    for (const g::Primitive& p : world->scene->objects) kinds.insert(p.kind);
+    for (const g::Mover& m : world->movers) kinds.insert(m.kind);
+    EXPECT_GE(kinds.size(), 5u) << family;
+    for (g::Kind k : kinds) {
+      EXPECT_GE(world->classes.cls[int(k)], 1) << family << ": " << g::kindInfo(k).name;
+    }
+  }
+}
+
 TEST(Generator, ClassTablesFollowRellis3dWhereItHasTheClass) {
   const ClassTable rellis = ClassTable::load(rellisClasses());
   std::map<std::string, uint32_t> rellis_raw;  // name -> raw id, from the RELLIS learning map

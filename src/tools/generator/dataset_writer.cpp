@@ -103,6 +103,10 @@ void DatasetWriter::writeScan(int scan, const std::vector<LidarPoint>& points,
     xyzr[4 * i + 1] = points[i].p_S.y();
     xyzr[4 * i + 2] = points[i].p_S.z();
     xyzr[4 * i + 3] = points[i].remission;
+    if (classes_.cls[int(points[i].kind)] < 0) {
+      throw std::logic_error(std::string("generator: kind '") + kindInfo(points[i].kind).name +
+                             "' has no class in the family's table");
+    }
     labels[i] = kindInfo(points[i].kind).raw_id | (points[i].instance << 16);
     preds[i] = raw_of_class_[size_t(net.predicted[i])];
   }
