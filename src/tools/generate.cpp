@@ -35,6 +35,7 @@ constexpr double kUnset = std::numeric_limits<double>::quiet_NaN();
 struct GenerateOptions {
   std::string scene = "forest", sensor = "os1-64", out;
   int scans = 100, columns = 0, movers = 4, threads = 0;
+  double max_range = 0.0;
   uint64_t seed = 0;
   double speed = 2.0, route_length = 400.0, range_noise = -1.0, sensor_height = 1.8;
   std::string route = "loop";
@@ -162,6 +163,7 @@ void runGenerate(const GenerateOptions& o) {
   wo.sensor = o.sensor;
   wo.columns = o.columns;
   wo.range_noise = o.range_noise;
+  wo.max_range = o.max_range;
   wo.scans = o.scans;
   wo.seed = o.seed;
   wo.route = g::parseRoute(o.route);
@@ -197,7 +199,7 @@ void runGenerate(const GenerateOptions& o) {
       const std::vector<g::LidarPoint> points =
           g::castScan(*scene, trajectory, movers, sensor, i, t_end, cast, T);
       const g::NetworkOutput out = network.run(*scene, points, i);
-      writer.writeScan(i, points, out, net.temperature);
+      writer.writeScan(i, points, out);
       writer.addMoverRows(i, movers, t_end, scene->terrain, points);
       metrics.add(i, points, out);
       total_points += points.size();
@@ -246,6 +248,8 @@ void addGenerateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--range-noise", o->range_noise,
                   "Range noise sigma [m] (negative: the sensor's default)")
+      ->capture_default_str();
+  cmd->add_option("--max-range", o->max_range, "Maximum range [m] (0: the sensor's, 120)")
       ->capture_default_str();
   cmd->add_flag("--motion-distortion", o->motion_distortion,
                 "Cast each column from the pose at its firing time (points in the end-of-sweep "

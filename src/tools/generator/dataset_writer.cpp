@@ -92,8 +92,7 @@ DatasetWriter::DatasetWriter(const std::string& dir, const OutputSet& outputs, i
 }
 
 void DatasetWriter::writeScan(int scan, const std::vector<LidarPoint>& points,
-                              const NetworkOutput& net, double temperature) {
-  (void)temperature;
+                              const NetworkOutput& net) {
   const size_t n = points.size();
   const std::string s = stem(scan);
   std::vector<float> xyzr(4 * n);

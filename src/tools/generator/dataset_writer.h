@@ -34,8 +34,7 @@ class DatasetWriter {
  public:
   DatasetWriter(const std::string& dir, const OutputSet& outputs, int num_classes,
                 const std::vector<uint32_t>& raw_of_class, const KindClasses& classes);
-  void writeScan(int scan, const std::vector<LidarPoint>& points, const NetworkOutput& net,
-                 double temperature);
+  void writeScan(int scan, const std::vector<LidarPoint>& points, const NetworkOutput& net);
   void addMoverRows(int scan, const std::vector<Mover>& movers, double t, const Terrain& terrain,
                     const std::vector<LidarPoint>& points);
   void writePoses(const std::vector<Eigen::Isometry3d>& T_W_S) const;

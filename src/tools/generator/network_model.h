@@ -71,7 +71,7 @@ class NetworkModel {
                double angular_spacing, uint64_t seed)
       : p_(params), classes_(classes), C_(num_classes), spacing_(angular_spacing), seed_(seed) {}
   NetworkOutput run(const Scene& scene, const std::vector<LidarPoint>& points, int scan) const;
-  // The cell's wrong class for class g (-1: the cell is not wrong for it).
+  // Whether the world cell holding (x, y, z) is one of the consistently wrong ones.
   bool wrongCell(double x, double y, double z) const;
 
  private:

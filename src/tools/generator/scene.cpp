@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "noise.h"
 #include "rng.h"
@@ -200,6 +202,14 @@ std::unique_ptr<Scene> Scene::build(Family family, uint64_t seed, const Route& r
   }
   s.extent = Grid2::covering(xmin - margin, ymin - margin, xmax + margin, ymax + margin,
                              Terrain::kResolution);
+  // About 20 B per terrain cell in all (terrain, path field, border map): 1.2 GB at this bound.
+  if (s.extent.size() > size_t(60e6)) {
+    throw std::invalid_argument(
+        "the route spans " + std::to_string(int(s.extent.nx * s.extent.res)) + " m x " +
+        std::to_string(int(s.extent.ny * s.extent.res)) +
+        " m with its margin, more than the generator holds (3.75 km^2): use --route loop or "
+        "out-and-back (revisits), a shorter --route-length or fewer --scans");
+  }
   // The trail exists beyond the part driven: 60 m ahead (and behind the start of a loop).
   double a0 = 0.0, a1 = std::min(max_arc + 60.0, route.length);
   if (route.kind == RouteKind::kLoop) {

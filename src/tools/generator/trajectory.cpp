@@ -137,9 +137,7 @@ void Trajectory::planar(double t, Eigen::Vector2d* xy, double* heading) const {
 }
 
 double Trajectory::maxArcLength(double t) const {
-  const double d = distanceDriven(t);
-  if (route_.kind == RouteKind::kLoop) return std::min(d, route_.length);
-  return std::min(d, route_.length);
+  return std::min(distanceDriven(t), route_.length);
 }
 
 Eigen::Isometry3d Trajectory::pose(double t) const {

@@ -22,6 +22,7 @@ struct WorldOptions {
   std::string sensor = "os1-64";
   int columns = 0;            // 0: the sensor's default
   double range_noise = -1.0;  // negative: the sensor's default
+  double max_range = 0.0;     // 0: the sensor's default (120 m)
   int scans = 100;
   uint64_t seed = 0;
   RouteKind route = RouteKind::kLoop;
