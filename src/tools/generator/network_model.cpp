@@ -22,7 +22,7 @@ NetworkParams NetworkParams::preset_named(const std::string& name) {
   p.preset = name;
   if (name == "good") return p;
   if (name == "poor") {
-    p.margin = 4.0, p.range_weight = 2.0, p.border_weight = 3.0, p.rare_weight = 1.3;
+    p.margin = 3.7, p.range_weight = 2.0, p.border_weight = 3.0, p.rare_weight = 1.3;
     p.field_sigma = 0.9, p.object_sigma = 0.7, p.point_sigma = 0.8, p.wrong_rate = 0.02;
     p.confidence_noise = 0.4, p.logit_gain = 1.5;
     return p;

@@ -34,7 +34,7 @@ struct Scene;
 
 struct NetworkParams {
   std::string preset = "good";
-  double margin = 4.5;
+  double margin = 4.2;
   double range_weight = 1.6;
   double border_weight = 2.6;
   double border_width = 0.5;  // [m]
@@ -45,7 +45,7 @@ struct NetworkParams {
   double partner_gain = 0.5;
   double logit_gain = 1.7;  // scales every logit: confidence without changing the argmax
   double class_noise = 0.9;
-  double confidence_noise = 0.2;
+  double confidence_noise = 0.3;
   double wrong_rate = 0.01;
   double wrong_cell = 4.0;  // [m]
   double wrong_boost = 1.5;
