@@ -551,3 +551,19 @@ TEST(Generator, MotionDistortedPointsAreStoredInTheEndOfSweepFrame) {
   ASSERT_GT(n, 200u);
   EXPECT_GT(double(on) / n, 0.95);
 }
+
+TEST(Generator, RewritesItsOwnDatasetWholeAndRefusesAnyOtherDirectory) {
+  const std::string dir = freshDir("gen_rewrite") + "/data";
+  std::string out;
+  const std::string args = "generate --columns 128 --movers 1 -q --out " + dir;
+  ASSERT_EQ(run(args + " --scans 4", &out), 0) << out;
+  ASSERT_EQ(run(args + " --scans 2", &out), 0) << out;
+  EXPECT_FALSE(fs::exists(dir + "/velodyne/000003.bin"));  // no scan of the longer run is left
+  const ClassTable t = ClassTable::load(dir + "/classes.yaml");
+  EXPECT_EQ(Dataset::open(dir, t).size(), 2u);
+  const std::string other = freshDir("gen_other");
+  writeBinary(other + "/keep.bin", std::vector<float>{1.0f});
+  EXPECT_NE(run("generate --columns 128 --scans 1 -q --out " + other, &out), 0);
+  EXPECT_NE(out.find("refusing"), std::string::npos) << out;
+  EXPECT_TRUE(fs::exists(other + "/keep.bin"));
+}
