@@ -5,6 +5,21 @@
 
 namespace evidential_octomap::tools {
 
+namespace {
+std::string& storedCommandLine() {
+  static std::string line;
+  return line;
+}
+}  // namespace
+
+void setCommandLine(int argc, char** argv) {
+  std::string line = "evidential_octomap";
+  for (int i = 1; i < argc; ++i) line += std::string(" ") + argv[i];
+  storedCommandLine() = line;
+}
+
+const std::string& commandLine() { return storedCommandLine(); }
+
 void addDataOptions(CLI::App* cmd, std::string* data, const std::string& data_help,
                     std::string* classes) {
   cmd->add_option("--data", *data, data_help)->required()->check(CLI::ExistingPath);

@@ -18,6 +18,11 @@ void addMergeCommand(CLI::App& app);     // merge.cpp
 void addInfoCommand(CLI::App& app);      // info.cpp
 void addFeaturesCommand(CLI::App& app);  // features.cpp
 void addCalibrateCommand(CLI::App& app); // calibrate.cpp
+void addGenerateCommand(CLI::App& app);  // generate.cpp
+
+// The command line as typed (main() records it), for the READMEs of generated data.
+void setCommandLine(int argc, char** argv);
+const std::string& commandLine();
 
 // --- shared option groups (defaults come from the structs, never restated) -----------------
 // --data (an existing path, described by data_help) and --classes (an existing class table YAML),

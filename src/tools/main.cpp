@@ -19,6 +19,8 @@ int main(int argc, char** argv) {
   t::addInfoCommand(app);
   t::addFeaturesCommand(app);
   t::addCalibrateCommand(app);
+  t::addGenerateCommand(app);
+  t::setCommandLine(argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
