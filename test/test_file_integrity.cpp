@@ -197,7 +197,9 @@ std::string toFormat4(const std::string& bytes, const EvidentialOcTree& tree) {
   size_t at = coding + 5 + 4 * size;
   std::string nodes;
   decodeLogOdds(bytes, &at, width, table, tree.numClasses(), &nodes);
-  std::string old = bytes.substr(0, coding) + nodes + bytes.substr(at);
+  // Format 5 had no adaptive-cap statistic (the f64 + u64 before the node count).
+  std::string old =
+      bytes.substr(0, coding - 24) + bytes.substr(coding - 8, 8) + nodes + bytes.substr(at);
   const uint32_t four = 4;
   std::memcpy(&old[s + kVersionOffset], &four, 4);
   reseal(&old);

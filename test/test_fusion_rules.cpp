@@ -468,7 +468,7 @@ TEST(FloatAbsorption, MillionFusionsIntoOneVoxelFollowTheRule) {
   EvidentialOcTreeNode* leaf = tree.leafForUpdate(key, true);
   std::vector<float> payload(num_classes, tree.rule().prior());
   test::RefBoundedEvidence reference(num_classes, kMaxStoredLogEvidence,
-                                     tree.config().evidence_cap);
+                                     tree.effectiveEvidenceCap());
   const auto uncapped = FusionRule::create(FusionRuleType::kDempster);
   int next_check = 1;
   for (int n = 1; n <= kFusions; ++n) {

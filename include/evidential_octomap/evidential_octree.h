@@ -119,8 +119,11 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // re-interprets stored payloads, so it is refused (std::logic_error) while the map holds any.
   void setConfig(const SemanticConfig& config);
   const FusionRule& rule() const { return *rule_; }
-  // Mean over the points inserted so far of sum_c log1p(e^c / C), the statistic the adaptive
-  // cap follows (SemanticConfig::adaptive_cap); 0 before the first insert or after reading.
+  // The dempster read-out cap in use: config().evidence_cap, or the adaptive cap of the
+  // evidence inserted so far (SemanticConfig::kAdaptiveCap).
+  double effectiveEvidenceCap() const;
+  // Mean over the points inserted (and merged) so far of sum_c log1p(e^c / C), the statistic
+  // the adaptive cap follows; 0 before the first insert.
   double meanPointLogEvidence() const {
     return evidence_points_ ? evidence_log_sum_ / double(evidence_points_) : 0.0;
   }
@@ -307,7 +310,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // The adaptive cap's statistic over every point handed to insertSemanticScan.
   double evidence_log_sum_ = 0.0;
   size_t evidence_points_ = 0;
-  void followEvidence(const std::vector<float>& evidence);
+  void followEvidence(const std::vector<float>& evidence);  // adds a scan to the statistic
+  void followEvidenceStatistic();                          // reads with the cap it gives
+  std::unique_ptr<FusionRule> makeRule(const SemanticConfig& config) const;
 
   // Registers the tree type with AbstractOcTree (the ColorOcTree pattern).
   class StaticMemberInitializer {

@@ -43,18 +43,20 @@ struct SemanticConfig {
   // p -> 1 in every well-observed voxel, right or wrong. Only the read-out changes, so the map
   // stays exact, order-independent and mergeable. 3 minimises the Brier score on the bundled
   // sequence (docs/results.md).
-  double evidence_cap = 3.0;
-  // dempster: the cap follows the evidence instead of being fixed: after every insert the tree
-  // sets evidence_cap = adaptiveEvidenceCap(m), m the mean over the points it was given of a
-  // point's own log-evidence sum_c log1p(e^c / C). A confident network (large m) earns a higher
-  // cap, though fewer points' worth of it: the cap is about 3.7 m^0.4. The constants were chosen
-  // leave-one-dataset-family-out over the bundled sequence and generated off-road sequences of
-  // four scene families and several network behaviours and evidence scales
-  // (docs/calibration.md, scripts/calibration/select_cap.py); a fixed evidence_cap (given on
-  // the CLI, as a parameter, or fitted on labelled scans by `evidential_octomap calibrate`)
-  // turns it off. Only the read-out depends on it, so the map stays exact and mergeable. A map
-  // read from a file keeps the cap it was saved with (this switch is not stored).
-  bool adaptive_cap = true;
+  // kAdaptiveCap (the default): the cap follows the evidence. The tree sets it after every
+  // insert to adaptiveEvidenceCap(m), m the mean over the points it was given of a point's own
+  // log-evidence sum_c log1p(e^c / C): a confident network (large m) earns a higher cap, though
+  // fewer points' worth of it (about 3.7 m^0.4). The constants were chosen leave-one-dataset-
+  // family-out over the bundled sequence and generated off-road sequences of four scene
+  // families, network behaviours and evidence scales (docs/calibration.md); the statistic is
+  // stored in the map and adds under merge, so merged maps read as sequential ones. A value >= 0
+  // is a fixed cap (0: none), e.g. one fitted on labelled scans by `evidential_octomap
+  // calibrate`.
+  double evidence_cap = kAdaptiveCap;
+  static constexpr double kAdaptiveCap = -1.0;
+  // The adaptive cap of a map that has no statistic yet (payloads set by hand, or read from a
+  // format without it).
+  static constexpr double kCapWithoutStatistic = 3.0;
   static constexpr double kAdaptiveCapScale = 3.7, kAdaptiveCapExponent = 0.4;
   static constexpr double kMinAdaptiveCap = 1.0, kMaxAdaptiveCap = 100.0;
   static double adaptiveEvidenceCap(double mean_point_log_evidence);

@@ -40,16 +40,9 @@ void bindConfig(nb::module_& m) {
       .def_rw("reference_compat", &SemanticConfig::reference_compat,
               "The authors' released configuration: gamma = 0 and count-cap down-sampling.")
       .def_rw("sbki_prior", &SemanticConfig::sbki_prior)
-      .def_prop_rw(
-          "evidence_cap", [](const SemanticConfig& c) { return c.evidence_cap; },
-          [](SemanticConfig& c, double cap) {
-            c.evidence_cap = cap;
-            c.adaptive_cap = false;  // a given cap is a fixed one
-          },
-          "dempster: opinions are read with the log-evidence capped at this (0: no cap); setting "
-          "it fixes the cap (adaptive_cap = False).")
-      .def_rw("adaptive_cap", &SemanticConfig::adaptive_cap,
-              "dempster: the cap follows the mean log-evidence per point (docs/calibration.md).")
+      .def_rw("evidence_cap", &SemanticConfig::evidence_cap,
+              "dempster: opinions are read with the log-evidence capped at this: -1 follows the "
+              "evidence (docs/calibration.md), 0 no cap, > 0 a fixed cap.")
       .def_rw("downsampling", &SemanticConfig::downsampling,
               "'average' (per cell of resolution / ds_multiplier) or 'count_cap' (the authors').")
       .def_rw("kernel_distance", &SemanticConfig::kernel_distance,

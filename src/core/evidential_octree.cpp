@@ -75,7 +75,7 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
       num_classes_(rhs.num_classes_),
       class_names_(rhs.class_names_),
       config_(rhs.config_),
-      rule_(FusionRule::create(rhs.config_)),
+      rule_(rhs.makeRule(rhs.config_)),
       evidence_log_sum_(rhs.evidence_log_sum_),
       evidence_points_(rhs.evidence_points_),
       pool_(std::make_unique<PayloadStore>(rhs.num_classes_, rhs.rule_->prior())) {
@@ -120,7 +120,7 @@ void EvidentialOcTree::setClassNames(const std::vector<std::string>& names) {
 void EvidentialOcTree::setConfig(const SemanticConfig& config) {
   const std::string problem = config.problem();
   if (!problem.empty()) throw std::invalid_argument("semantic config: " + problem);
-  auto rule = FusionRule::create(config);
+  auto rule = makeRule(config);
   const bool meaning_changes =
       config.rule != config_.rule || config.sbki_prior != config_.sbki_prior;
   if (rule_ && meaning_changes && numSemanticNodes() > 0) {
@@ -163,7 +163,7 @@ InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& poin
 }
 
 void EvidentialOcTree::followEvidence(const std::vector<float>& evidence) {
-  if (!config_.adaptive_cap || config_.rule != "dempster") return;
+  if (config_.evidence_cap != SemanticConfig::kAdaptiveCap || config_.rule != "dempster") return;
   // Every 4th point is plenty for a mean over a scan and keeps this off the insert's cost.
   const size_t C = static_cast<size_t>(num_classes_), n = evidence.size() / C;
   for (size_t i = 0; i < n; i += 4) {
@@ -174,10 +174,27 @@ void EvidentialOcTree::followEvidence(const std::vector<float>& evidence) {
     }
     if (sum > 0.0) evidence_log_sum_ += sum, ++evidence_points_;
   }
-  const double cap = SemanticConfig::adaptiveEvidenceCap(meanPointLogEvidence());
-  if (evidence_points_ == 0 || cap == config_.evidence_cap) return;
-  config_.evidence_cap = cap;
-  rule_ = FusionRule::create(config_);  // only the read-out changes
+  followEvidenceStatistic();
+}
+
+void EvidentialOcTree::followEvidenceStatistic() {
+  if (config_.evidence_cap == SemanticConfig::kAdaptiveCap) rule_ = makeRule(config_);
+}
+
+double EvidentialOcTree::effectiveEvidenceCap() const {
+  if (config_.evidence_cap != SemanticConfig::kAdaptiveCap) return config_.evidence_cap;
+  return evidence_points_ ? SemanticConfig::adaptiveEvidenceCap(meanPointLogEvidence())
+                          : SemanticConfig::kCapWithoutStatistic;
+}
+
+std::unique_ptr<FusionRule> EvidentialOcTree::makeRule(const SemanticConfig& config) const {
+  SemanticConfig resolved = config;
+  if (config.evidence_cap == SemanticConfig::kAdaptiveCap) {
+    resolved.evidence_cap = evidence_points_
+                                ? SemanticConfig::adaptiveEvidenceCap(meanPointLogEvidence())
+                                : SemanticConfig::kCapWithoutStatistic;
+  }
+  return FusionRule::create(resolved);
 }
 
 InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& points_S,
@@ -500,6 +517,9 @@ void EvidentialOcTree::clampOccupancy() {
 
 void EvidentialOcTree::merge(const EvidentialOcTree& other) {
   checkCompatible(other, "merge");
+  evidence_log_sum_ += other.evidence_log_sum_;  // the merged map reads as the sequential one
+  evidence_points_ += other.evidence_points_;
+  followEvidenceStatistic();
   if (!other.root) return;
   Edit edit(pool_.get(), 1024);
   if (!root) {

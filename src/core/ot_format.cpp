@@ -1,11 +1,12 @@
 // The data section of an EvidentialOcTree .ot file (what AbstractOcTree::write puts after OctoMap's
-// text header "id / size / res / data"). Little-endian, format 5:
+// text header "id / size / res / data"). Little-endian, format 6:
 //
 //   u32 magic "EVEM", u32 format, f64 resolution (2+), u32 C, C x string class name,
 //   string rule, string downsampling (2+), string kernel_distance (2+), 7 x f64 (length_scale
 //   sigma0 beta gamma drop_percent ds_multiplier max_range), 5 x u8 flags, f32 sbki_prior,
 //   5 x f32 occupancy log-odds (clamp min, clamp max, hit, miss, threshold), f64 evidence_cap
 //   (4+; older maps are read without a cap, as they were written), u64 node count,
+//   f64 + u64 the adaptive cap's statistic (sum and count, 6+; evidence_cap -1 = adaptive),
 //   log-odds coding (5+), nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of every
 //   byte from the magic to the end magic.
 //   log-odds coding (5+): u8 width W (1, 2 or 4); for W < 4 u32 T (<= 256 for W = 1,
@@ -46,7 +47,9 @@ constexpr uint32_t kFormatWithoutCrc = 1;
 constexpr uint32_t kFormatWithInnerPayloads = 2;
 constexpr uint32_t kFormatSparseNodes = 3;  // no inner payloads, sparse leaf payloads
 constexpr uint32_t kFormatEvidenceCap = 4;
-constexpr uint32_t kFormat = 5;  // log-odds coded by a table
+constexpr uint32_t kFormatLogOddsTable = 5;  // log-odds coded by a table
+constexpr uint32_t kFormatAdaptiveCap = 6;    // the adaptive cap's statistic
+constexpr uint32_t kFormat = 6;
 constexpr uint32_t kMaxNameLength = 4096;
 constexpr uint8_t kNoPayloadTag = 0;
 constexpr uint8_t kDenseTag = 1;
@@ -242,6 +245,8 @@ void EvidentialOcTree::writeHeader(SectionWriter& out) const {
     out.pod(v);
   }
   out.pod(config_.evidence_cap);
+  out.pod(evidence_log_sum_);
+  out.pod(static_cast<uint64_t>(evidence_points_));
 }
 
 // Depth first, child 0 first. Returns false (and stops) at the first inner node whose occupancy
@@ -378,10 +383,21 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
   float occupancy[5];
   for (float& v : occupancy) v = in.pod<float>("occupancy parameters");
   config.evidence_cap = version >= kFormatEvidenceCap ? in.pod<double>("evidence cap") : 0.0;
-  config.adaptive_cap = false;  // a read map keeps the cap it was saved with
+  double log_sum = 0.0;
+  uint64_t points = 0;
+  if (version >= kFormatAdaptiveCap) {
+    log_sum = in.pod<double>("evidence statistic");
+    points = in.pod<uint64_t>("evidence statistic");
+    if (!(std::isfinite(log_sum) && log_sum >= 0.0) || (points == 0) != (log_sum == 0.0)) {
+      throw FormatError("bad evidence statistic");
+    }
+  }
   const std::string problem = storedParameterProblem(resolution, occupancy, config);
   if (!problem.empty()) throw FormatError("bad parameters: " + problem);
   setConfig(config);
+  evidence_log_sum_ = log_sum;
+  evidence_points_ = static_cast<size_t>(points);
+  followEvidenceStatistic();
   setClassNames(names);
   clamping_thres_min = occupancy[0];
   clamping_thres_max = occupancy[1];
@@ -393,7 +409,7 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
 NodeCoding EvidentialOcTree::readNodeCoding(SectionReader& in, uint32_t version) {
   NodeCoding coding;
   coding.version = version;
-  if (version < kFormat) return coding;  // f32 log-odds
+  if (version < kFormatLogOddsTable) return coding;  // f32 log-odds
   coding.width = in.pod<uint8_t>("log-odds coding");
   if (coding.width != 1 && coding.width != 2 && coding.width != 4) {
     throw FormatError("bad log-odds width " + std::to_string(coding.width));

@@ -39,8 +39,8 @@ std::string SemanticConfig::problem() const {
     return outOfRange("drop_percent", drop_percent, "in [0, 100)");
   if (!(std::isfinite(sbki_prior) && sbki_prior > 0.0f))
     return outOfRange("sbki_prior", sbki_prior, "finite and > 0");
-  if (!(std::isfinite(evidence_cap) && evidence_cap >= 0.0))
-    return outOfRange("evidence_cap", evidence_cap, "finite and >= 0 (0: no cap)");
+  if (!(evidence_cap == kAdaptiveCap || (std::isfinite(evidence_cap) && evidence_cap >= 0.0)))
+    return outOfRange("evidence_cap", evidence_cap, "-1 (adaptive) or finite and >= 0 (0: no cap)");
   if (!(std::isfinite(evidence_floor) && evidence_floor >= 0.0))
     return outOfRange("evidence_floor", evidence_floor, "finite and >= 0 (0: off)");
   if (downsampling != "average" && downsampling != "count_cap")
@@ -88,7 +88,7 @@ void SemanticConfig::print(std::ostream& out) const {
       << "reference_compat: " << (reference_compat ? "true" : "false") << "\n"
       << "sbki_prior: " << sbki_prior << "\n"
       << "evidence_cap: " << evidence_cap << "\n"
-      << "adaptive_cap: " << (adaptive_cap ? "true" : "false") << "\n"
+
       << "downsampling: " << downsampling
       << (effectiveDownsampling() != downsampling ? " (count_cap used)" : "") << "\n"
       << "ds_multiplier: " << ds_multiplier << "\n"

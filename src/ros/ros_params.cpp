@@ -93,10 +93,7 @@ void readSemanticConfig(const ros::NodeHandle& nh, double resolution, SemanticCo
   nh.param("uncertainty_threshold", c.uncertainty_threshold, c.uncertainty_threshold);
   nh.param("reference_compat", c.reference_compat, c.reference_compat);
   nh.param("sbki_prior", c.sbki_prior, c.sbki_prior);
-  // A given ~evidence_cap is a fixed cap unless ~adaptive_cap says otherwise.
-  if (nh.hasParam("evidence_cap")) c.adaptive_cap = false;
   nh.param("evidence_cap", c.evidence_cap, c.evidence_cap);
-  nh.param("adaptive_cap", c.adaptive_cap, c.adaptive_cap);
   nh.param("downsampling", c.downsampling, c.downsampling);
   nh.param("ds_multiplier", c.ds_multiplier, c.ds_multiplier);
   nh.param("kernel_distance", c.kernel_distance, c.kernel_distance);

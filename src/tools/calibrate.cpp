@@ -2,9 +2,9 @@
 // evidence_cap) on labelled scans of a user's own network (a validation split). The scans are
 // mapped once as `map` maps them; the cap that minimises the Brier score of the map on their GT
 // points (golden-section search over ln cap) is written as a parameter file that the node loads
-// (rosparam: `evidence_cap`, `adaptive_cap: false`), and printed for `map --evidence-cap` and
+// (rosparam: `evidence_cap`), and printed for `map --evidence-cap` and
 // Python's SemanticConfig(evidence_cap=...). Without it the cap follows the evidence
-// (SemanticConfig::adaptive_cap), with constants chosen across datasets.
+// (SemanticConfig::kAdaptiveCap), with constants chosen across datasets.
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -37,7 +37,6 @@ double brierWithCap(EvidentialOcTree* tree, const std::vector<Query>& queries, i
                     double cap) {
   SemanticConfig c = tree->config();
   c.evidence_cap = cap;
-  c.adaptive_cap = false;
   tree->setConfig(c);
   return evaluateMap(*tree, queries, ignore_class).quality.brier;
 }
@@ -56,7 +55,7 @@ void runCalibrate(const CalibrateOptions& o) {
                           !o.quiet, "mapping");
   const std::vector<Query> queries =
       buildQueries(scans, protocol.query_scans, classes.ignore_class, nullptr, nullptr);
-  const double adaptive = run.tree->config().evidence_cap;
+  const double adaptive = run.tree->effectiveEvidenceCap();
   const auto brier = [&](double log_cap) {
     return brierWithCap(run.tree.get(), queries, classes.ignore_class, std::exp(log_cap));
   };
@@ -80,7 +79,7 @@ void runCalibrate(const CalibrateOptions& o) {
        << " GT points, evidence " << describeEvidence(ev) << ").\n"
        << "# Brier score " << best << " (adaptive cap " << adaptive << ": " << with_adaptive
        << "). Load it as node parameters (rosparam) or pass --evidence-cap to the CLI.\n"
-       << "evidence_cap: " << cap << "\nadaptive_cap: false\n";
+       << "evidence_cap: " << cap << "\n";
   writeFileAtomically(o.out, file.str());
   std::cout << std::setprecision(4) << "evidence cap " << cap << ": Brier " << best
             << " (the adaptive cap " << adaptive << " gives " << with_adaptive << ")\nwrote "

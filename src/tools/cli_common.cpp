@@ -54,13 +54,10 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
                 "down-sampling and the percentile threshold");
   cmd->add_option("--sbki-prior", c->sbki_prior, "S-BKI prior alpha0")->capture_default_str();
   cmd->add_option("--evidence-cap", c->evidence_cap,
-                  "dempster: read opinions with the fused log-evidence capped here (0: no cap); "
-                  "a fixed cap instead of the adaptive one")
-      ->each([c](const std::string&) { c->adaptive_cap = false; })
+                  "dempster: read opinions with the fused log-evidence capped here: -1 follows "
+                  "the evidence (docs/calibration.md), 0 no cap, > 0 a fixed cap (e.g. from "
+                  "'calibrate')")
       ->capture_default_str();
-  cmd->add_flag("!--fixed-cap", c->adaptive_cap,
-                "dempster: keep --evidence-cap fixed instead of following the evidence's mean "
-                "log-evidence per point (the default, docs/calibration.md)");
   cmd->add_option("--downsampling", c->downsampling,
                   "Semantic input down-sampling: average (grid of resolution/ds_multiplier) or "
                   "count_cap (the authors': at most ds_multiplier+1 points per 2x2x2-voxel block)")
@@ -150,7 +147,7 @@ std::string variantName(const SemanticConfig& c) {
     if (c.reference_compat) v += " reference_compat (gamma=0, count cap)";
     if (c.adaptive_length && !c.reference_compat) v += " + adaptive length";
     if (c.uncertainty_threshold && !c.reference_compat) v += " + threshold";
-    if (!(c.evidence_cap > 0.0)) v += " w/o evidence cap";
+    if (c.evidence_cap == 0.0) v += " w/o evidence cap";
     if (c.kernel_distance != SemanticConfig().kernel_distance)
       v += " kernel distance " + c.kernel_distance;
     if (c.downsampling != SemanticConfig().downsampling && !c.reference_compat)

@@ -71,7 +71,6 @@ SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
   } else if (v == "dempster-no-cap") {  // Dempster's product read as is
     c.rule = "dempster";
     c.evidence_cap = 0.0;
-    c.adaptive_cap = false;
   } else if (v == "dempster-centre") {  // kernel distance to voxel centres (a point can miss
     c.rule = "dempster";                // its own voxel)
     c.kernel_distance = "centre";
@@ -82,7 +81,6 @@ SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
     c.rule = "dempster";
     c.reference_compat = true;
     c.evidence_cap = 0.0;
-    c.adaptive_cap = false;
   } else if (v == "sbki" || v == "ebs") {
     c.rule = v;
   } else {
@@ -112,7 +110,6 @@ bool setParameter(const std::string& key, const std::string& value, SemanticConf
                                                     {"evidence_floor", &c->evidence_floor}};
   for (const auto& [name, field] : fields) {
     if (key != name) continue;
-    if (field == &c->evidence_cap) c->adaptive_cap = false;  // a given cap is a fixed one
     try {
       size_t used = 0;
       *field = std::stod(value, &used);

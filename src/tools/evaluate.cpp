@@ -21,7 +21,7 @@ struct EvalOptions {
   size_t scans = 0;
   bool synthetic = false;
   NoiseModel noise;
-  double evidence_cap = -1.0;  // < 0: the map's own
+  double evidence_cap = -2.0;  // < -1: the map's own
 };
 
 void runEval(const EvalOptions& o) {
@@ -31,7 +31,7 @@ void runEval(const EvalOptions& o) {
     throw std::runtime_error(o.classes + " has " + std::to_string(classes.numClasses()) +
                              " classes, " + o.map + " has " + std::to_string(tree->numClasses()));
   }
-  if (o.evidence_cap >= 0.0) {  // only the read-out changes: the stored evidence is the same
+  if (o.evidence_cap >= SemanticConfig::kAdaptiveCap) {  // only the read-out changes: the stored evidence is the same
     SemanticConfig config = tree->config();
     config.evidence_cap = o.evidence_cap;
     tree->setConfig(config);

@@ -110,7 +110,7 @@ Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
           total += raw[c];
           if (raw[c] > best) best = raw[c], s = c;
         }
-        const long double cap = tree.config().evidence_cap;
+        const long double cap = tree.effectiveEvidenceCap();
         const long double scale = cap > 0 && total > cap ? cap / total : 1.0L;
         long double sum = 0.0L;
         for (int c = 0; c < C; ++c) sum += std::exp(scale * raw[c]);
