@@ -148,6 +148,124 @@ TEST(ParameterSpace, MapsSetThroughOctoMapSettersAreRefusedOrLoad) {
   std::remove(path.c_str());
 }
 
+// --- refused by the insert that would use them --------------------------------------------------
+
+// Every leaf (key, log-odds, payload): what an insert that is refused must not change. (The map
+// cannot be written to compare bytes: its parameters are what the writer refuses.)
+struct LeafState {
+  octomap::OcTreeKey key;
+  float log_odds;
+  std::vector<float> payload;
+  bool operator==(const LeafState& o) const {
+    return key == o.key && log_odds == o.log_odds && payload == o.payload;
+  }
+};
+std::vector<LeafState> leafStates(const EvidentialOcTree& tree) {
+  std::vector<LeafState> leaves;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
+    leaves.push_back({it.getKey(), it->getLogOdds(), tree.payload(&*it)});
+  }
+  return leaves;
+}
+
+struct UnsavableValue {
+  const char* name;
+  void (*set)(EvidentialOcTree*);
+};
+void PrintTo(const UnsavableValue& v, std::ostream* os) { *os << v.name; }
+
+class InsertCheck : public ::testing::TestWithParam<UnsavableValue> {};
+
+// A value set through OctoMap's own (unchecked) setters that saveMap would refuse is refused by
+// the next insert, with the reason saveMap gives, and the map is left as it was; once the value
+// is put right, the same scan inserts and the map saves.
+TEST_P(InsertCheck, UnsavableValueIsRefusedByTheNextInsertWithSaveMapsReason) {
+  const std::string path = tempPath(std::string("insert_check_") + GetParam().name + ".ot");
+  EvidentialOcTree tree(0.2, 3);
+  addScan(&tree);
+  const SensorModel good = tree.sensorModel();
+  const std::vector<LeafState> before = leafStates(tree);
+  ASSERT_GT(before.size(), 0u);
+  GetParam().set(&tree);
+
+  std::string save_message;
+  try {
+    saveMap(tree, path);
+  } catch (const std::runtime_error& e) {
+    save_message = e.what();
+  }
+  ASSERT_FALSE(save_message.empty()) << "saveMap accepted " << GetParam().name;
+  std::string insert_message;
+  try {
+    addScan(&tree);
+  } catch (const std::invalid_argument& e) {
+    insert_message = e.what();
+  }
+  ASSERT_FALSE(insert_message.empty()) << "the insert accepted " << GetParam().name;
+  EXPECT_EQ(save_message, "cannot save " + path + ": " + insert_message);
+  EXPECT_EQ(insert_message, tree.parameterProblem());
+  EXPECT_TRUE(leafStates(tree) == before) << "a refused insert changed the map";
+  // The other overload (sensor frame and pose) is refused alike.
+  octomap::Pointcloud points;
+  points.push_back(1.0f, 0.0f, 0.0f);
+  EXPECT_THROW(tree.insertSemanticScan(points, std::vector<float>{1.f, 0.f, 0.f},
+                                       octomap::pose6d(0, 0, 0, 0, 0, 0)),
+               std::invalid_argument);
+  EXPECT_TRUE(leafStates(tree) == before);
+
+  tree.setResolution(0.2);
+  tree.setSensorModel(good);
+  EXPECT_NO_THROW(addScan(&tree));
+  EXPECT_NO_THROW(saveMap(tree, path));
+  std::remove(path.c_str());
+}
+
+constexpr double kNaNValue = std::numeric_limits<double>::quiet_NaN();
+INSTANTIATE_TEST_SUITE_P(
+    OctoMapSetters, InsertCheck,
+    ::testing::Values(
+        UnsavableValue{"hit_1", [](EvidentialOcTree* t) { t->setProbHit(1.0); }},
+        UnsavableValue{"hit_NaN", [](EvidentialOcTree* t) { t->setProbHit(kNaNValue); }},
+        UnsavableValue{"hit_below_half", [](EvidentialOcTree* t) { t->setProbHit(0.3); }},
+        UnsavableValue{"miss_0", [](EvidentialOcTree* t) { t->setProbMiss(0.0); }},
+        UnsavableValue{"miss_NaN", [](EvidentialOcTree* t) { t->setProbMiss(kNaNValue); }},
+        UnsavableValue{"miss_above_half", [](EvidentialOcTree* t) { t->setProbMiss(0.6); }},
+        UnsavableValue{"clamp_min_0", [](EvidentialOcTree* t) { t->setClampingThresMin(0.0); }},
+        UnsavableValue{"clamp_max_1", [](EvidentialOcTree* t) { t->setClampingThresMax(1.0); }},
+        UnsavableValue{"clamp_min_NaN",
+                       [](EvidentialOcTree* t) { t->setClampingThresMin(kNaNValue); }},
+        UnsavableValue{"clamp_max_NaN",
+                       [](EvidentialOcTree* t) { t->setClampingThresMax(kNaNValue); }},
+        UnsavableValue{"clamps_inverted",
+                       [](EvidentialOcTree* t) {
+                         t->setClampingThresMin(0.4);
+                         t->setClampingThresMax(0.3);
+                       }},
+        UnsavableValue{"occupancy_threshold_1",
+                       [](EvidentialOcTree* t) { t->setOccupancyThres(1.0); }},
+        UnsavableValue{"occupancy_threshold_NaN",
+                       [](EvidentialOcTree* t) { t->setOccupancyThres(kNaNValue); }},
+        UnsavableValue{"resolution_0", [](EvidentialOcTree* t) { t->setResolution(0.0); }},
+        UnsavableValue{"resolution_NaN",
+                       [](EvidentialOcTree* t) { t->setResolution(kNaNValue); }}),
+    [](const ::testing::TestParamInfo<UnsavableValue>& info) { return info.param.name; });
+
+// Unbounded clamping set through setClampingThresLog (chunk maps merged and clamped later) is
+// what that setter is for: inserts go on; a bound then changed through OctoMap's setter is checked.
+TEST(InsertCheck, UnboundedChunkClampsMapButAnOctoMapClampOfZeroIsRefused) {
+  EvidentialOcTree tree(0.2, 3);
+  const float unbounded = std::numeric_limits<float>::max();
+  tree.setClampingThresLog(-unbounded, unbounded);
+  EXPECT_FALSE(tree.parameterProblem().empty());  // not savable until clamped
+  EXPECT_EQ(tree.insertProblem(), "");
+  EXPECT_NO_THROW(addScan(&tree));
+  tree.setClampingThresMin(0.0);
+  EXPECT_THROW(addScan(&tree), std::invalid_argument);
+  tree.setProbHit(1.0);
+  tree.setClampingThresLog(-unbounded, unbounded);
+  EXPECT_THROW(addScan(&tree), std::invalid_argument);  // hit is still checked
+}
+
 // Each value valid most of the time, so that both accepted and refused configs are common.
 SemanticConfig randomConfig(std::mt19937& rng) {
   auto pick = [&rng](const std::vector<double>& valid, const std::vector<double>& invalid) {

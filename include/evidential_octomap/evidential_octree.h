@@ -135,13 +135,19 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // "" when resolution, sensor model and semantic config are all inside the shared ranges, so
   // that what writeData writes, readData reads back; else what is wrong.
   std::string parameterProblem() const;
+  // What insertSemanticScan checks before it changes anything: parameterProblem() (the text
+  // saveMap gives after "cannot save <path>: "), except clamping bounds set through
+  // setClampingThresLog (unbounded chunk maps, clamped before they are saved).
+  std::string insertProblem() const;
 
   // --- integration ----------------------------------------------------------------------
   // Inserts one scan: occupancy by OctoMap ray casting from origin_W, semantics by the
   // adaptive sparse kernel. points_W are in the world (tree) frame; evidence is N x C,
   // row-major, one evidence vector per point (each value finite and >= 0).
-  // Throws std::invalid_argument (and leaves the map unchanged) when evidence is malformed or the
-  // kernel support is beyond what a scan may cost (SemanticConfig::supportProblem).
+  // Throws std::invalid_argument (and leaves the map unchanged) when evidence is malformed, the
+  // kernel support is beyond what a scan may cost (SemanticConfig::supportProblem), or the map's
+  // parameters are ones saveMap would refuse (insertProblem(): e.g. OctoMap's setProbHit(1.0),
+  // setProbMiss(0), setClampingThresMin(0), NaN, or setResolution(0)), with saveMap's reason.
   // With `unobserved` (a map of equal resolution, C and rule), the evidence this map drops
   // because its voxel has not been observed yet (kernel updates outside known space,
   // kernel_creates_leaves off) is added there instead: what a later chunk of a sequence hands
@@ -306,6 +312,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   std::unique_ptr<PayloadStore> pool_;  // one sparse payload per semantic leaf
   std::string read_error_;
   bool created_for_read_ = false;               // made by create(), readData not called yet
+  // The bounds setClampingThresLog set, accepted by insertProblem() while they are in use.
+  bool log_clamps_set_ = false;
+  float log_clamp_min_ = 0.0f, log_clamp_max_ = 0.0f;
   std::unique_ptr<ScanIntegrator> integrator_;  // created on first insert; keeps scratch buffers
   // The adaptive cap's statistic over every point handed to insertSemanticScan.
   double evidence_log_sum_ = 0.0;

@@ -200,3 +200,29 @@ def test_type_stubs_are_installed():
     stub = (package / "_core.pyi").read_text()
     assert "def insert_scan(" in stub and "def query(" in stub and "class EvidentialOcTree" in stub
     assert (package / "py.typed").exists()
+
+
+@pytest.mark.parametrize("attribute, value", [
+    ("prob_hit", 1.0), ("prob_hit", float("nan")), ("prob_miss", 0.0),
+    ("clamping_thres_min", 0.0), ("clamping_thres_max", 1.0), ("occupancy_thres", 1.0),
+])
+def test_unsavable_sensor_model_is_refused_by_the_next_insert_with_the_save_reason(
+        tmp_path, attribute, value):
+    """OctoMap's setters are unchecked: the insert that would use the value refuses it with the
+    reason save gives, and the map stays as it was."""
+    tree, points = wall_tree()
+    before = tree.leaves()
+    setattr(tree, attribute, value)
+    path = tmp_path / "map.ot"
+    with pytest.raises(RuntimeError) as saved:
+        tree.save(str(path))
+    _, evidence = wall()
+    with pytest.raises(ValueError) as inserted:
+        tree.insert_scan(points, evidence, origin=ORIGIN)
+    assert str(saved.value) == f"cannot save {path}: {inserted.value}"
+    assert str(inserted.value).startswith("sensor model: ")
+    after = tree.leaves()
+    np.testing.assert_array_equal(after.centers, before.centers)
+    np.testing.assert_array_equal(after.occupancy, before.occupancy)
+    np.testing.assert_array_equal(after.belief, before.belief)
+    assert not path.exists()

@@ -140,16 +140,32 @@ void writeFileAtomically(const std::string& path, const std::function<bool(std::
     std::ofstream out(temp.path, std::ios::binary | std::ios::trunc);
     if (!out) fail("cannot write " + path + ": " + errnoText());
     bool ok = false;
+    errno = 0;
     try {
       ok = write(out) && out.flush().good();
     } catch (const std::exception& e) {
       fail("writing " + path + " failed: " + e.what());
     }
+    int write_errno = ok ? 0 : errno;
     out.close();
-    if (!ok || out.fail()) fail("writing " + path + " failed (disk full, or the data refused)");
+    if (ok && out.fail()) write_errno = errno;
+    if (!ok || out.fail()) {
+      // The stream keeps no error code; the errno of its failed write(2) is the reason when it
+      // is one a write gives (a full disk, a file size limit, an I/O error, a quota).
+      if (write_errno == ENOSPC || write_errno == EFBIG || write_errno == EIO ||
+          write_errno == EDQUOT || write_errno == EROFS) {
+        fail("writing " + path + " failed: " + std::strerror(write_errno) +
+             "; the previous file, if any, is unchanged");
+      }
+      fail("writing " + path + " failed (disk full, or the data refused); the previous file, if " +
+           "any, is unchanged");
+    }
   }
   // The bytes are durable before the rename makes them visible, and the rename before we return.
-  if (::fsync(temp.fd) != 0) fail("writing " + path + " failed: fsync: " + errnoText());
+  if (::fsync(temp.fd) != 0) {
+    fail("writing " + path + " failed: fsync: " + errnoText() +
+         "; the previous file, if any, is unchanged");
+  }
   if (::rename(temp.path.c_str(), path.c_str()) != 0) {
     fail("cannot replace " + path + ": " + errnoText());
   }

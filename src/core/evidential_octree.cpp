@@ -155,6 +155,10 @@ InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& poin
                                                  const std::vector<float>& evidence,
                                                  const octomap::point3d& origin_W,
                                                  EvidentialOcTree* unobserved) {
+  // A parameter set through OctoMap's unchecked setters is refused here, where it would take
+  // effect, rather than after hours of mapping by saveMap (with the same reason).
+  const std::string problem = insertProblem();
+  if (!problem.empty()) throw std::invalid_argument(problem);
   if (unobserved) checkCompatible(*unobserved, "unobserved evidence");
   if (!integrator_) integrator_ = std::make_unique<ScanIntegrator>(config_);
   const InsertStats stats = integrator_->integrate(points_W, evidence, origin_W, this, unobserved);
@@ -506,6 +510,9 @@ void EvidentialOcTree::setClampingThresLog(float min_log_odds, float max_log_odd
   }
   clamping_thres_min = min_log_odds;
   clamping_thres_max = max_log_odds;
+  log_clamps_set_ = true;
+  log_clamp_min_ = min_log_odds;
+  log_clamp_max_ = max_log_odds;
 }
 
 void EvidentialOcTree::clampOccupancy() {

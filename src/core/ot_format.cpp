@@ -32,6 +32,8 @@
 #include <string>
 #include <vector>
 
+#include <octomap/octomap_utils.h>
+
 #include "crc32.h"
 #include "log_odds_table.h"
 #include "evidential_octomap/evidential_octree.h"
@@ -165,6 +167,19 @@ std::string EvidentialOcTree::parameterProblem() const {
   const float occupancy[5] = {clamping_thres_min, clamping_thres_max, prob_hit_log, prob_miss_log,
                               occ_prob_thres_log};
   return storedParameterProblem(resolution, occupancy, config_);
+}
+
+std::string EvidentialOcTree::insertProblem() const {
+  if (log_clamps_set_ && clamping_thres_min == log_clamp_min_ &&
+      clamping_thres_max == log_clamp_max_) {
+    // Bounds of setClampingThresLog (finite, min <= 0 <= max): any such pair may be in use
+    // while mapping; the rest is checked with the default bounds in their place.
+    const float occupancy[5] = {static_cast<float>(octomap::logodds(0.12)),  // OctoMap's defaults
+                                static_cast<float>(octomap::logodds(0.97)),
+                                prob_hit_log, prob_miss_log, occ_prob_thres_log};
+    return storedParameterProblem(resolution, occupancy, config_);
+  }
+  return parameterProblem();
 }
 
 std::string EvidentialOcTree::innerNodeProblem(const EvidentialOcTreeNode* node) const {

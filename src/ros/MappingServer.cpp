@@ -4,6 +4,9 @@
 #include <diagnostic_msgs/DiagnosticArray.h>
 
 #include <cctype>
+#include <algorithm>
+#include <cstdlib>
+#include <iomanip>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -72,6 +75,9 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   config_.num_classes = classes_.numClasses();
   tree_ = makeTree();
   if (!config_.map_file.empty()) loadStartupMap();
+  if (config_.autosave_path.empty()) config_.autosave_path = defaultAutosavePath(config_.map_file);
+  config_.autosave_path = absolutePath(config_.autosave_path);
+  if (config_.resume_from_autosave) resumeFromAutosave();
   {
     std::ostringstream s;
     semantic_config_.print(s);
@@ -120,6 +126,14 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
 
   clouds_ = std::make_unique<LatestQueue<PendingCloud>>(size_t(config_.insert_queue_size));
   insertion_thread_ = std::thread(&MappingServer::insertionLoop, this);
+  if (config_.autosave_period > 0.0) {
+    std::error_code ec;
+    std::filesystem::create_directories(std::filesystem::path(config_.autosave_path).parent_path(),
+                                        ec);
+    ROS_INFO("autosave: every %g s to %s (atomic; resume at start-up %s)", config_.autosave_period,
+             config_.autosave_path.c_str(), config_.resume_from_autosave ? "on" : "off");
+    autosave_thread_ = std::thread(&MappingServer::autosaveLoop, this);
+  }
   subscribeInputs();
   restartPublishTimer();
   status_timer_ = nh_.createTimer(ros::Duration(1.0), &MappingServer::statusTimer, this);
@@ -143,6 +157,15 @@ MappingServer::~MappingServer() {
   reconfigure_server_.reset();
   clouds_->close();
   if (insertion_thread_.joinable()) insertion_thread_.join();
+  if (autosave_thread_.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(autosave_mutex_);
+      stopping_ = true;
+    }
+    autosave_cv_.notify_all();
+    autosave_thread_.join();
+    autosaveOnce();  // a clean shutdown loses nothing
+  }
   image_sync_.reset();
   tf_filter_.reset();
 }
@@ -257,6 +280,7 @@ void MappingServer::insertionLoop() {
         std::lock_guard<std::mutex> lock(status_mutex_);
         ++status_.clouds_dropped_invalid;
       }
+      recordError(std::string("cloud dropped: ") + e.what());
       warnDropped(std::string("cloud dropped: ") + e.what() + "; map unchanged");
     }
     publishStatus();
@@ -287,6 +311,7 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
       std::lock_guard<std::mutex> status_lock(status_mutex_);
       ++status_.clouds_dropped_invalid;
     }
+    recordError("cloud dropped (frame " + cloud.header.frame_id + "): " + error);
     warnDropped("cloud dropped (frame " + cloud.header.frame_id + "): " + error +
                 "; map unchanged");
     return;
@@ -301,9 +326,11 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
       std::lock_guard<std::mutex> status_lock(status_mutex_);
       ++status_.clouds_dropped_invalid;
     }
+    recordError(std::string("cloud dropped: ") + e.what());
     warnDropped(std::string("cloud dropped: ") + e.what() + "; map unchanged");
     return;
   }
+  ++map_changes_;
   const double ms = msSince(t0);
   const auto& t = pending.T_W_S.transform.translation;
   last_origin_W_ = octomap::point3d(t.x, t.y, t.z);
@@ -544,6 +571,7 @@ bool MappingServer::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
   }
   std::lock_guard<std::mutex> lock(mutex_);
   adoptMap(std::move(loaded), occupancy_only);
+  ++map_changes_;
   res.success = true;
   res.message = "loaded " + std::to_string(tree_->getNumLeafNodes()) + " leaves from " + path;
   ROS_INFO("load_map: %s", res.message.c_str());
@@ -567,6 +595,7 @@ bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
     ROS_ERROR("reset: %s; keeping rule %s", e.what(), semantic_config_.rule.c_str());
   }
   tree_ = makeTree();
+  ++map_changes_;
   ROS_INFO("reset: map cleared (rule %s)", semantic_config_.rule.c_str());
   recordMapSize();
   outputs_->markStale();
@@ -581,6 +610,7 @@ bool MappingServer::clearBox(ClearBbx::Request& req, ClearBbx::Response& res) {
     ROS_ERROR("clear_bbx: %s; map unchanged", res.message.c_str());
     return true;
   }
+  ++map_changes_;
   ROS_INFO("clear_bbx: %u leaves cleared in [%.2f %.2f %.2f] .. [%.2f %.2f %.2f]",
            res.voxels_cleared, req.min.x, req.min.y, req.min.z, req.max.x, req.max.y, req.max.z);
   recordMapSize();
@@ -605,6 +635,125 @@ bool MappingServer::query(QueryMap::Request& req, QueryMap::Response& res) {
   return true;
 }
 
+// --- autosave and recovery ------------------------------------------------------------------
+
+std::string MappingServer::defaultAutosavePath(const std::string& map_file) {
+  if (!map_file.empty()) {
+    const std::filesystem::path p(map_file);
+    return (p.parent_path() / (p.stem().string() + ".autosave.ot")).string();
+  }
+  std::string home;
+  if (const char* ros_home = std::getenv("ROS_HOME")) {
+    home = ros_home;
+  } else if (const char* user_home = std::getenv("HOME")) {
+    home = std::string(user_home) + "/.ros";
+  } else {
+    home = ".";
+  }
+  std::string name = ros::this_node::getName();
+  for (char& ch : name)
+    if (ch == '/') ch = '_';
+  while (!name.empty() && name.front() == '_') name.erase(0, 1);
+  return home + "/evidential_octomap/" + (name.empty() ? "map" : name) + ".autosave.ot";
+}
+
+void MappingServer::recordError(const std::string& message) {
+  std::lock_guard<std::mutex> lock(status_mutex_);
+  status_.last_error = message;
+}
+
+// The autosave is only ever replaced by rename (writeFileAtomically), so the file at the path is
+// the newest complete one; temporaries of a writer killed mid-write are never read.
+void MappingServer::resumeFromAutosave() {
+  const std::string& path = config_.autosave_path;
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    ROS_INFO("autosave: none at %s yet: starting %s", path.c_str(),
+             config_.map_file.empty() ? "with an empty map" : "from ~map_file");
+    return;
+  }
+  const auto written = std::filesystem::last_write_time(path, ec);
+  const double age_s =
+      ec ? -1.0
+         : std::chrono::duration<double>(std::filesystem::file_time_type::clock::now() - written)
+               .count();
+  bool occupancy_only = false;
+  try {
+    adoptMap(readMapFile(path, &occupancy_only), occupancy_only);
+  } catch (const std::exception& e) {
+    ROS_ERROR("autosave: cannot resume from %s: %s; starting %s (the next autosave replaces it)",
+              path.c_str(), e.what(), config_.map_file.empty() ? "empty" : "from ~map_file");
+    recordError(std::string("autosave not resumed: ") + e.what());
+    return;
+  }
+  config_.resolution = tree_->getResolution();
+  ROS_INFO("autosave: resumed from %s, written %.1f s ago: %zu leaves (%zu semantic)",
+           path.c_str(), age_s, tree_->getNumLeafNodes(), tree_->numSemanticNodes());
+}
+
+void MappingServer::autosaveLoop() {
+  const auto period = std::chrono::duration<double>(config_.autosave_period);
+  std::unique_lock<std::mutex> lock(autosave_mutex_);
+  while (!stopping_) {
+    if (autosave_cv_.wait_for(lock, period, [this] { return stopping_; })) break;
+    lock.unlock();
+    autosaveOnce();
+    lock.lock();
+  }
+}
+
+// The map is serialised under the map lock (inserts wait for that long: the stall, reported on
+// ~status) and written outside it: a slow or full disk never holds up mapping.
+void MappingServer::autosaveOnce() {
+  std::string bytes, problem;
+  uint64_t changes = 0;
+  double stall_ms = 0.0;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    changes = map_changes_;
+    if (autosaved_once_ && changes == autosaved_changes_) return;  // nothing new to save
+    const auto t0 = std::chrono::steady_clock::now();
+    problem = tree_->parameterProblem();
+    if (problem.empty()) {
+      std::ostringstream s;
+      s << std::setprecision(17);  // as saveMap: the same bytes
+      if (!tree_->write(s) || !s.good()) problem = "the map could not be serialised";
+      bytes = s.str();
+    }
+    stall_ms = msSince(t0);
+  }
+  try {
+    if (!problem.empty()) throw std::runtime_error("cannot save " + config_.autosave_path + ": " +
+                                                   problem);
+    writeFileAtomically(config_.autosave_path, bytes);
+  } catch (const std::exception& e) {
+    {
+      std::lock_guard<std::mutex> lock(status_mutex_);
+      ++status_.autosaves_failed;
+      status_.last_error = std::string("autosave failed: ") + e.what();
+    }
+    ROS_ERROR_THROTTLE(10.0, "autosave failed: %s; mapping goes on, the previous autosave is kept",
+                       e.what());
+    return;
+  }
+  autosaved_changes_ = changes;
+  const bool first = !autosaved_once_;
+  autosaved_once_ = true;
+  {
+    std::lock_guard<std::mutex> lock(status_mutex_);
+    ++status_.autosaves_written;
+    status_.last_autosave_stall_ms = stall_ms;
+    status_.max_autosave_stall_ms = std::max(status_.max_autosave_stall_ms, stall_ms);
+  }
+  if (first) {
+    ROS_INFO("autosave: wrote %s (%zu bytes; map lock held %.1f ms)", config_.autosave_path.c_str(),
+             bytes.size(), stall_ms);
+  } else {
+    ROS_DEBUG("autosave: wrote %s (%zu bytes; map lock held %.1f ms)",
+              config_.autosave_path.c_str(), bytes.size(), stall_ms);
+  }
+}
+
 // A setting the core refuses (or a kernel the machine cannot afford) is not applied: the values
 // in use stay and go back to the server, so clients see what the node maps with.
 void MappingServer::reconfigure(MappingConfig& rc, uint32_t) {
@@ -622,6 +771,7 @@ void MappingServer::reconfigure(MappingConfig& rc, uint32_t) {
   tree_->setConfig(semantic);
   tree_->setSensorModel(model);
   semantic_config_ = semantic;
+  ++map_changes_;
   config_.label_evidence = node.label_evidence;
   if (node.publish_rate != config_.publish_rate) {
     config_.publish_rate = node.publish_rate;

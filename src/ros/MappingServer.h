@@ -25,6 +25,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <atomic>
+#include <condition_variable>
 #include <boost/thread/recursive_mutex.hpp>
 #include <deque>
 #include <memory>
@@ -108,6 +109,13 @@ class MappingServer {
   static std::string absolutePath(const std::string& path);
   // Map size into status_ (map mutex held).
   void recordMapSize();
+  // Autosave (~autosave_period): the thread, one autosave, and the resume at start-up.
+  void autosaveLoop();
+  void autosaveOnce();
+  void resumeFromAutosave();
+  static std::string defaultAutosavePath(const std::string& map_file);
+  // Records why a cloud or an autosave failed in ~status (last_error).
+  void recordError(const std::string& message);
 
   ros::NodeHandle nh_, pnh_;
   NodeConfig config_;
@@ -145,6 +153,15 @@ class MappingServer {
   ros::Timer publish_timer_, status_timer_;
   boost::recursive_mutex reconfigure_mutex_;  // before the server that locks it
   std::unique_ptr<dynamic_reconfigure::Server<MappingConfig>> reconfigure_server_;
+
+  // Autosave: its thread sleeps on autosave_cv_ until the period ends or the node stops.
+  std::thread autosave_thread_;
+  std::mutex autosave_mutex_;
+  std::condition_variable autosave_cv_;
+  bool stopping_ = false;                // under autosave_mutex_
+  uint64_t map_changes_ = 0;             // under mutex_: inserts, edits, loads, resets
+  uint64_t autosaved_changes_ = 0;       // map_changes_ at the last autosave (autosave thread)
+  bool autosaved_once_ = false;
 
   std::mutex status_mutex_;  // status_ and last_diagnosed_: every thread updates counters
   MappingStatus status_, last_diagnosed_;

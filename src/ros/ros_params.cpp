@@ -1,5 +1,7 @@
 #include "ros_params.h"
 
+#include <cmath>
+
 #include <ros/package.h>
 
 #include <stdexcept>
@@ -51,6 +53,11 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("latch", c.latch, c.latch);
   nh.param("load_map/max_file_mb", c.load_map_max_mb, c.load_map_max_mb);
   nh.param("map_file", c.map_file, c.map_file);
+  nh.param("autosave_period", c.autosave_period, c.autosave_period);
+  nh.param("autosave_path", c.autosave_path, c.autosave_path);
+  nh.param("resume_from_autosave", c.resume_from_autosave, c.autosave_period > 0.0);
+  if (!(c.autosave_period >= 0.0) || !std::isfinite(c.autosave_period))
+    throw std::invalid_argument("~autosave_period must be >= 0 s (0: off)");
   nh.param("base_frame_id", c.base_frame_id, c.base_frame_id);
   nh.param("pointcloud_min_z", c.pointcloud_band.min_z, c.pointcloud_band.min_z);
   nh.param("pointcloud_max_z", c.pointcloud_band.max_z, c.pointcloud_band.max_z);

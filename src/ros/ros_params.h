@@ -39,6 +39,13 @@ struct NodeConfig {
   double load_map_max_mb = 4096.0;   // ~load_map refuses larger files (<= 0: no limit)
   // octomap_server parity.
   std::string map_file;              // map loaded at start-up: our .ot, or an occupancy .bt
+  // Autosave: every autosave_period s (0: off) the map is written atomically to autosave_path
+  // (default: beside ~map_file as <stem>.autosave.ot, else $ROS_HOME (~/.ros)/evidential_octomap/
+  // <node name>.autosave.ot); at start-up with resume_from_autosave (default: on when autosave
+  // is) the node resumes from that file when it exists.
+  double autosave_period = 0.0;
+  std::string autosave_path;
+  bool resume_from_autosave = false;
   std::string base_frame_id;         // frame of pointcloud_min_z/max_z ("" = frame_id)
   HeightBand pointcloud_band;        // pointcloud_min_z/max_z: input points kept [m]
   HeightBand occupancy_band;         // occupancy_min_z/max_z: leaves in views and 2-D maps [m]

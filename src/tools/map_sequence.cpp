@@ -28,6 +28,7 @@ struct MapOptions {
   NoiseModel noise;
   bool render = true;
   bool quiet = false;
+  size_t autosave_every = 0;
 };
 
 void runMap(const MapOptions& o) {
@@ -49,8 +50,13 @@ void runMap(const MapOptions& o) {
   const Protocol protocol = makeProtocol(o.protocol, scans.size());
   const auto evidence =
       deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
+  Autosave autosave;
+  if (o.autosave_every > 0) {
+    makeDirectories(o.out);
+    autosave = {o.out + "/map.autosave.ot", o.autosave_every};
+  }
   MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,
-                          !o.quiet, "mapping");
+                          !o.quiet, "mapping", autosave);
   std::vector<float> query_evidence;
   const std::vector<Query> queries =
       buildQueries(scans, protocol.query_scans, classes.ignore_class, &evidence, &query_evidence);
@@ -114,6 +120,10 @@ void addMapCommand(CLI::App& app) {
       "reliability diagram)");
   addDataOptions(cmd, &o->data, "Dataset directory (or a single .bin scan)", &o->classes);
   cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
+  cmd->add_option("--autosave-every", o->autosave_every,
+                  "Write the map so far to <out>/map.autosave.ot (atomically) every N mapped "
+                  "scans; 0: never")
+      ->capture_default_str();
   cmd->add_option("--protocol", o->protocol,
                   "reconstruction (query the mapped scans) or held-out (map the first half, "
                   "query the second)")

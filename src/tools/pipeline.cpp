@@ -1,4 +1,5 @@
 #include "pipeline.h"
+#include "evidential_octomap/io.h"
 
 #include <octomap/OcTree.h>
 
@@ -162,7 +163,7 @@ double MapRun::ms_mean() const {
 MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& which,
                   const std::vector<std::vector<float>>& evidence, const ClassTable& classes,
                   const SemanticConfig& config, double resolution, bool progress,
-                  const std::string& label) {
+                  const std::string& label, const Autosave& autosave) {
   MapRun run;
   run.tree = std::make_unique<EvidentialOcTree>(resolution, classes.numClasses(), config);
   run.tree->setClassNames(classes.names);
@@ -190,6 +191,10 @@ MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& whi
     t.cpu_ms_occupancy += st.cpu_ms_occupancy;
     t.cpu_ms_kernel += st.cpu_ms_kernel;
     t.cpu_ms_update += st.cpu_ms_update;
+    ++run.scans_mapped;
+    if (autosave.every > 0 && run.scans_mapped % autosave.every == 0) {
+      saveMap(*run.tree, autosave.path);
+    }
     bar.tick();
   }
   return run;

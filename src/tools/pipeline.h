@@ -59,14 +59,22 @@ struct MapRun {
   std::unique_ptr<EvidentialOcTree> tree;
   std::vector<double> ms_per_scan;  // insertSemanticScan wall time, per mapped scan
   InsertStats total;                // summed over scans (uncertainty_threshold: last scan)
+  size_t scans_mapped = 0;
   double ms_median() const;
   double ms_mean() const;
+};
+
+// Every `every` scans the map so far is written to `path` (saveMap: atomic, so a killed run
+// leaves the last complete autosave); every = 0: never.
+struct Autosave {
+  std::string path;
+  size_t every = 0;
 };
 
 // Inserts scans `which` (in order) with their evidence into a new tree.
 MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& which,
                   const std::vector<std::vector<float>>& evidence, const ClassTable& classes,
                   const SemanticConfig& config, double resolution, bool progress,
-                  const std::string& label = "mapping");
+                  const std::string& label = "mapping", const Autosave& autosave = {});
 
 }  // namespace evidential_octomap::tools

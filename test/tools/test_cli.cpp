@@ -22,6 +22,7 @@
 
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/io.h"
 #include "test_helpers.h"
 
 namespace fs = std::filesystem;
@@ -313,6 +314,26 @@ TEST_F(CliEndToEnd, ExportKilledAtAnyMomentLeavesTheOldFileWhole) {
   }
   std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(color));
   EXPECT_NE(dynamic_cast<octomap::ColorOcTree*>(read.get()), nullptr);
+}
+
+// --autosave-every N: every N scans the map so far is saved (atomically) beside the outputs;
+// after 3 scans with N = 2 the autosave is the map of the first 2 scans (the suite's 2-scan map).
+TEST_F(CliEndToEnd, MapAutosaveEveryNScansHoldsTheMapOfThoseScans) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  const std::string out = out_ + "/autosave";
+  const Result r = run("map --data " + kittiDir() + " --classes " + kittiClasses() +
+                       " --scans 3 --quiet --no-render --autosave-every 2 --out " + out);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const auto autosave = evidential_octomap::loadMap(out + "/map.autosave.ot");
+  const auto two_scans = evidential_octomap::loadMap(out_ + "/map/map.ot");
+  const auto three_scans = evidential_octomap::loadMap(out + "/map.ot");
+  EXPECT_EQ(autosave->getNumLeafNodes(), two_scans->getNumLeafNodes());
+  EXPECT_EQ(autosave->numSemanticNodes(), two_scans->numSemanticNodes());
+  EXPECT_NE(autosave->getNumLeafNodes(), three_scans->getNumLeafNodes());
+  for (const auto& e : fs::directory_iterator(out)) {
+    EXPECT_EQ(e.path().filename().string().find(".evidential-tmp."), std::string::npos)
+        << e.path();
+  }
 }
 
 TEST(CliErrors, MissingDataDirectoryFails) {

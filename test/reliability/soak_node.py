@@ -1,0 +1,230 @@
+#!/usr/bin/python3
+"""Soak of evidential_mapping_node: hours of input compressed into minutes.
+
+    python3 test/reliability/soak_node.py --minutes 30 --out build/soak [--autosave-period 10]
+    python3 test/reliability/soak_node.py --plot build/soak/samples.csv docs/figures/soak.png
+
+Starts its own roscore (a free port) and the node (rosrun, from the sourced catkin workspace),
+then replays the bundled scans (data/semantickitti_08_first10, one-hot evidence from the hard
+predictions, as play_semantickitti.py) forth and back, 0..9, 8..0, 1..9, ..., with their poses,
+as fast as the node sustains: the next scan is published as soon as fewer than two are waiting
+(closed loop, so the node is never idle and the queue never overflows by design). Every 10 s the
+node's ~status (clouds inserted, dropped, queue length, last / mean insert time, map leaves and
+memory, autosave stall) and its RSS (/proc/<pid>/status VmRSS) are written to samples.csv; at the
+end a summary to summary.json. --plot draws the CSV to a PNG (python3-matplotlib).
+"""
+import argparse
+import csv
+import importlib.util
+import json
+import os
+import socket
+import subprocess
+import sys
+import time
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def forth_and_back(n):
+    """0..n-1, n-2..0, 1..n-1, ...: every step to a neighbouring scan (a revisit replay)."""
+    i, step = 0, 1
+    while True:
+        yield i
+        if not 0 <= i + step < n:
+            step = -step
+        i += step
+
+
+def rss_mb(pid):
+    with open("/proc/%d/status" % pid) as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    return float("nan")
+
+
+def free_port():
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+def soak(args):
+    os.makedirs(args.out, exist_ok=True)
+    port = free_port()
+    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
+    roscore = subprocess.Popen(["roscore", "-p", str(port)], stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL)
+    node = None
+    try:
+        import rospy
+        from tf2_msgs.msg import TFMessage
+        from sensor_msgs.msg import PointCloud2
+        from std_msgs.msg import Header
+        from evidential_octomap.msg import MappingStatus
+        import numpy as np
+
+        spec = importlib.util.spec_from_file_location(
+            "player", os.path.join(REPO, "src/ros/scripts/play_semantickitti.py"))
+        player = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(player)
+
+        time.sleep(3)
+        rospy.init_node("soak_node", disable_signals=True)
+        node_args = ["rosrun", "evidential_octomap", "evidential_mapping_node",
+                     "cloud_in:=/velodyne_points", "_insert_queue_size:=2",
+                     "_autosave_period:=%g" % args.autosave_period,
+                     "_autosave_path:=%s" % os.path.join(args.out, "autosave.ot")]
+        node_args += args.node_param
+        log = open(os.path.join(args.out, "node.log"), "w")
+        node = subprocess.Popen(node_args, stdout=log, stderr=subprocess.STDOUT)
+
+        data = os.path.join(REPO, "data/semantickitti_08_first10")
+        names, lut, _ = player.load_class_table(os.path.join(REPO, "config/classes_semantickitti.yaml"))
+        tr = player.read_calib_tr(os.path.join(data, "calib.txt"))
+        poses = player.read_poses(os.path.join(data, "poses.txt"), tr)
+        scans = sorted(f[:-4] for f in os.listdir(os.path.join(data, "velodyne")) if f.endswith(".bin"))
+        clouds = []
+        for name in scans:
+            xyzr = np.fromfile(os.path.join(data, "velodyne", name + ".bin"), dtype="<f4").reshape(-1, 4)
+            raw = np.fromfile(os.path.join(data, "predictions", name + ".label"), dtype="<u4") & 0xFFFF
+            cls = lut[raw]
+            evidence = np.zeros((xyzr.shape[0], len(names)), dtype=np.float32)
+            evidence[np.arange(xyzr.shape[0]), cls] = 20.0
+            clouds.append(player.make_cloud(xyzr[:, :3], evidence, Header(frame_id="velodyne")))
+
+        status = {"msg": None}
+        rospy.Subscriber("/evidential_mapping_node/status", MappingStatus,
+                         lambda m: status.__setitem__("msg", m), queue_size=10)
+        cloud_pub = rospy.Publisher("/velodyne_points", PointCloud2, queue_size=2)
+        tf_pub = rospy.Publisher("/tf", TFMessage, queue_size=10)
+        deadline = time.time() + 60
+        while (cloud_pub.get_num_connections() == 0 or tf_pub.get_num_connections() == 0 or
+               status["msg"] is None) and time.time() < deadline:
+            time.sleep(0.1)
+        time.sleep(0.5)
+
+        order = forth_and_back(len(scans))
+        published = 0
+        t0 = time.time()
+        end = t0 + 60.0 * args.minutes
+        next_sample = t0
+        fields = ["t_s", "published", "inserted", "dropped_queue", "dropped_invalid", "dropped_tf",
+                  "queue_length", "last_insert_ms", "mean_insert_ms", "map_leaves",
+                  "map_semantic_leaves", "map_memory_mb", "rss_mb", "autosaves_written",
+                  "autosaves_failed", "last_autosave_stall_ms", "max_autosave_stall_ms"]
+        samples = open(os.path.join(args.out, "samples.csv"), "w", newline="")
+        writer = csv.writer(samples)
+        writer.writerow(fields)
+        insert_ms_window = []
+        last_inserted = 0
+        while time.time() < end:
+            s = status["msg"]
+            done = (s.clouds_inserted + s.clouds_dropped_queue + s.clouds_dropped_invalid +
+                    s.clouds_dropped_tf) if s else 0
+            if s and s.clouds_inserted != last_inserted:
+                insert_ms_window.append(s.last_insert_ms)
+                last_inserted = s.clouds_inserted
+            if published - done < 2:
+                i = next(order)
+                stamp = rospy.Time.now()
+                tf_pub.publish(TFMessage([player.make_tf(poses[int(scans[i])], stamp, "map",
+                                                         "velodyne")]))
+                time.sleep(0.02)  # TF first, as the player does
+                cloud = clouds[i]
+                cloud.header.stamp = stamp
+                cloud_pub.publish(cloud)
+                published += 1
+            else:
+                time.sleep(0.005)
+            if time.time() >= next_sample and s is not None:
+                writer.writerow([round(time.time() - t0, 1), published, s.clouds_inserted,
+                                 s.clouds_dropped_queue, s.clouds_dropped_invalid,
+                                 s.clouds_dropped_tf, s.queue_length, round(s.last_insert_ms, 1),
+                                 round(s.mean_insert_ms, 1), s.map_leaves, s.map_semantic_leaves,
+                                 round(s.map_memory_bytes / 1e6, 2), round(rss_mb(node.pid), 1),
+                                 s.autosaves_written, s.autosaves_failed,
+                                 round(s.last_autosave_stall_ms, 1),
+                                 round(s.max_autosave_stall_ms, 1)])
+                samples.flush()
+                next_sample += args.sample_s
+        samples.close()
+        s = status["msg"]
+        summary = {"minutes": args.minutes, "published": published,
+                   "inserted": s.clouds_inserted, "dropped_queue": s.clouds_dropped_queue,
+                   "dropped_invalid": s.clouds_dropped_invalid, "dropped_tf": s.clouds_dropped_tf,
+                   "mean_insert_ms": s.mean_insert_ms, "rss_mb_end": rss_mb(node.pid),
+                   "map_leaves": s.map_leaves, "map_memory_mb": s.map_memory_bytes / 1e6,
+                   "autosaves_written": s.autosaves_written, "autosaves_failed": s.autosaves_failed,
+                   "max_autosave_stall_ms": s.max_autosave_stall_ms,
+                   "scans_per_s": s.clouds_inserted / (time.time() - t0),
+                   "node_alive": node.poll() is None}
+        with open(os.path.join(args.out, "summary.json"), "w") as f:
+            json.dump(summary, f, indent=2)
+        print(json.dumps(summary, indent=2))
+    finally:
+        if node is not None:
+            node.terminate()
+            try:
+                node.wait(60)
+            except subprocess.TimeoutExpired:
+                node.kill()
+        roscore.terminate()
+        roscore.wait()
+
+
+def plot(csv_path, png_path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    rows = list(csv.DictReader(open(csv_path)))
+    t = [float(r["t_s"]) / 60.0 for r in rows]
+    col = lambda k: [float(r[k]) for r in rows]  # noqa: E731
+    fig, ax = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
+    ax[0].plot(t, col("rss_mb"), label="node RSS")
+    ax[0].plot(t, col("map_memory_mb"), label="map memoryUsage()")
+    ax[0].set_ylabel("MB")
+    ax[0].legend(loc="upper left")
+    ax[1].plot(t, col("last_insert_ms"), ".", ms=3, label="last insert")
+    ax[1].plot(t, col("mean_insert_ms"), label="mean insert")
+    ax[1].set_ylabel("insert [ms]")
+    ax[1].legend(loc="upper left")
+    ax[2].plot(t, col("queue_length"), ".", ms=3, label="queue length")
+    drops = [a + b + c for a, b, c in zip(col("dropped_queue"), col("dropped_invalid"),
+                                          col("dropped_tf"))]
+    ax[2].plot(t, drops, label="clouds dropped (total)")
+    ax[2].set_ylabel("clouds")
+    ax[2].legend(loc="upper left")
+    ax[3].plot(t, col("map_leaves"), label="map leaves")
+    ax[3].set_ylabel("leaves")
+    ax3 = ax[3].twinx()
+    ax3.plot(t, col("inserted"), color="tab:orange", label="scans inserted")
+    ax3.set_ylabel("scans inserted")
+    ax[3].set_xlabel("minutes")
+    fig.suptitle("evidential_mapping_node soak: bundled scans forth and back, closed loop")
+    fig.tight_layout()
+    fig.savefig(png_path, dpi=90)
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    p.add_argument("--minutes", type=float, default=30.0)
+    p.add_argument("--out", default=os.path.join(REPO, "build/soak"))
+    p.add_argument("--sample-s", type=float, default=10.0)
+    p.add_argument("--autosave-period", type=float, default=10.0)
+    p.add_argument("--node-param", action="append", default=[],
+                   help="extra _name:=value for the node, e.g. _bounded_memory:=true")
+    p.add_argument("--plot", nargs=2, metavar=("CSV", "PNG"))
+    args = p.parse_args()
+    if args.plot:
+        plot(*args.plot)
+        return 0
+    soak(args)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

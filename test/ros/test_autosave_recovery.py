@@ -1,0 +1,311 @@
+#!/usr/bin/python3
+"""rostest: autosave and recovery of evidential_mapping_node, and its saves on full and read-only
+filesystems. A real roscore (rostest's), the real node started by this test (rosrun) so that it
+can be killed with SIGKILL and started again with the same arguments, real PointCloud2 and TF.
+
+Kill test: scan g is a few points at x = SPACING * g (its own voxel; the sensor stands below
+it), published at RATE Hz. The node is killed at a random moment, started again, and asked
+(~query) which scans its map holds: they must be a prefix 0 .. R-1 of the scans (nothing lost in
+the middle), every restart must log that it resumed from the autosave, and the scans lost, from
+R to the last one the node had inserted before the kill, must span at most one autosave period
+(plus the time a write takes). At the end no temporary may be left beside the autosave.
+EVIDENTIAL_AUTOSAVE_KILLS (default 4: CI) sets the number of kills; EVIDENTIAL_AUTOSAVE_REPORT
+a file for the per-kill figures (JSON lines).
+
+Disk test (root: a tmpfs mounted by the test; otherwise skipped with the reason): ~save_map and
+the autosave into a nearly full and into a read-only filesystem fail with the reason, keep the
+previous file byte-identical, leave no temporary, and the node goes on mapping.
+"""
+import json
+import os
+import random
+import shutil
+import signal
+import struct
+import subprocess
+import tempfile
+import time
+import unittest
+
+import rospy
+import rostest
+import tf2_ros
+from geometry_msgs.msg import Point, TransformStamped
+from sensor_msgs.msg import PointCloud2, PointField
+
+from evidential_octomap.msg import MappingStatus
+from evidential_octomap.srv import QueryMap, SaveMap
+
+KILLS = int(os.environ.get("EVIDENTIAL_AUTOSAVE_KILLS", "4"))
+PERIOD = float(os.environ.get("EVIDENTIAL_AUTOSAVE_PERIOD", "1.0"))
+RATE = 20.0      # scans per second
+SPACING = 0.6    # m between the scans' voxels
+WRITE_SLACK = 0.5  # s: an autosave's serialisation and write, and ~status latency
+
+
+def cloud(stamp, frame):
+    """Four points in one voxel 3 m above the sensor, label 1 (float32 x y z, uint32 label)."""
+    msg = PointCloud2()
+    msg.header.stamp = stamp
+    msg.header.frame_id = frame
+    msg.height, msg.width = 1, 4
+    msg.fields = [PointField("x", 0, PointField.FLOAT32, 1), PointField("y", 4, PointField.FLOAT32, 1),
+                  PointField("z", 8, PointField.FLOAT32, 1),
+                  PointField("label", 12, PointField.UINT32, 1)]
+    msg.point_step, msg.row_step = 16, 64
+    msg.is_dense = True
+    msg.data = b"".join(struct.pack("<fffI", 0.02 * i, 0.0, 3.0, 1) for i in range(4))
+    return msg
+
+
+class Node:
+    """evidential_mapping_node as a child process (rosrun execs the binary: the pid is the node)."""
+
+    def __init__(self, name, log_path, **params):
+        self.name = "/" + name
+        args = ["rosrun", "evidential_octomap", "evidential_mapping_node", "__name:=" + name,
+                "cloud_in:=/%s_cloud" % name]
+        args += ["_%s:=%s" % (k, v) for k, v in params.items()]
+        self.log_path = log_path
+        self.log = open(log_path, "a")
+        self.process = subprocess.Popen(args, stdout=self.log, stderr=subprocess.STDOUT)
+        self.status = None
+        self.sub = rospy.Subscriber(self.name + "/status", MappingStatus, self._keep, queue_size=10)
+        rospy.wait_for_service(self.name + "/query", timeout=60)
+        self.query = rospy.ServiceProxy(self.name + "/query", QueryMap)
+        self.save = rospy.ServiceProxy(self.name + "/save_map", SaveMap)
+
+    def _keep(self, msg):
+        self.status = msg
+
+    def wait_status(self, pred, timeout=30.0):
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            s = self.status
+            if s is not None and pred(s):
+                return s
+            time.sleep(0.02)
+        return None
+
+    def kill(self):
+        self.process.send_signal(signal.SIGKILL)
+        self.process.wait()
+        self.close()
+
+    def stop(self):
+        self.process.send_signal(signal.SIGINT)
+        try:
+            self.process.wait(30)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+            self.process.wait()
+        self.close()
+
+    def close(self):
+        self.sub.unregister()
+        self.log.close()
+
+
+class Feeder:
+    """Publishes scan g with the sensor at (SPACING * g, 0, 0) (TF map -> <name>_sensor)."""
+
+    def __init__(self, name):
+        self.frame = name + "_sensor"
+        self.pub = rospy.Publisher("/%s_cloud" % name, PointCloud2, queue_size=200)
+        self.tf = tf2_ros.TransformBroadcaster()
+        self.published = {}  # g -> wall time of publication
+
+    def wait_connected(self, timeout=30.0):
+        """Until the node subscribes to the clouds and to /tf (else the first scans are lost)."""
+        deadline = time.time() + timeout
+        while time.time() < deadline:
+            if self.pub.get_num_connections() > 0 and self.tf.pub_tf.get_num_connections() > 0:
+                time.sleep(0.2)
+                return True
+            time.sleep(0.05)
+        return False
+
+    def publish(self, g):
+        stamp = rospy.Time.now()
+        t = TransformStamped()
+        t.header.stamp = stamp
+        t.header.frame_id = "map"
+        t.child_frame_id = self.frame
+        t.transform.translation.x = SPACING * g
+        t.transform.rotation.w = 1.0
+        self.tf.sendTransform(t)
+        self.pub.publish(cloud(stamp, self.frame))
+        self.published[g] = time.time()
+
+
+def scans_in_map(node, count):
+    """Indices g < count whose voxel holds evidence in the node's map."""
+    points = [Point(SPACING * g + 0.03, 0.0, 3.0) for g in range(count)]
+    answer = node.query(points)
+    return [g for g in range(count) if answer.labels[g] >= 0]
+
+
+def files(directory):
+    return sorted(os.listdir(directory))
+
+
+class AutosaveRecoveryTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_autosave_recovery")
+        cls.dir = tempfile.mkdtemp(prefix="evidential_autosave_")
+
+    @classmethod
+    def tearDownClass(cls):
+        if not os.environ.get("EVIDENTIAL_KEEP_TEST_DIR"):
+            shutil.rmtree(cls.dir, ignore_errors=True)
+
+    def test_kill_minus_9_at_random_moments_resumes_from_the_newest_autosave(self):
+        autosave = os.path.join(self.dir, "kill", "map.autosave.ot")
+        log_path = os.path.join(self.dir, "kill_node.log")
+        params = dict(autosave_period=PERIOD, autosave_path=autosave, insert_queue_size=100,
+                      publish_rate=1.0)
+        feeder = Feeder("autosave_kill")
+        rng = random.Random(20261201)
+        g = 0                # next scan index
+        resumed = 0          # scans in the map at the last start
+        lost_seconds, lost_scans = [], []
+        report = os.environ.get("EVIDENTIAL_AUTOSAVE_REPORT")
+        for kill in range(KILLS + 1):
+            before = open(log_path).read() if os.path.exists(log_path) else ""
+            had_autosave = os.path.exists(autosave)
+            node = Node("autosave_kill", log_path, **params)
+            try:
+                self.assertTrue(feeder.wait_connected())
+                if kill > 0:
+                    in_map = scans_in_map(node, max(feeder.published) + 1)
+                    self.assertEqual(in_map, list(range(len(in_map))),
+                                     "kill %d: the resumed map is not a prefix of the scans" % kill)
+                    resumed_now = len(in_map)
+                    log = open(log_path).read()[len(before):]
+                    # Killed before its first autosave, the node starts empty (and lost at most
+                    # one period); else it resumes.
+                    self.assertIn(("autosave: resumed from " if had_autosave else
+                                   "autosave: none at ") + autosave, log, log[-2000:])
+                    self.assertNotIn("cannot resume", log)
+                    # Lost: from the first scan not in the map to the last one inserted.
+                    inserted_before_kill = last_inserted
+                    self.assertGreaterEqual(resumed_now, resumed,
+                                            "kill %d: an older autosave than before" % kill)
+                    lost = max(0, inserted_before_kill - resumed_now)
+                    span = (feeder.published[inserted_before_kill - 1] -
+                            feeder.published[resumed_now]) if lost > 0 else 0.0
+                    lost_scans.append(lost)
+                    lost_seconds.append(span)
+                    self.assertLessEqual(span, PERIOD + WRITE_SLACK,
+                                         "kill %d: %d scans (%.2f s) lost" % (kill, lost, span))
+                    if report:
+                        with open(report, "a") as f:
+                            f.write(json.dumps({"kill": kill, "lost_scans": lost,
+                                                "lost_s": round(span, 3),
+                                                "resumed_scans": resumed_now}) + "\n")
+                    resumed = resumed_now
+                    g = resumed_now  # the scans lost are published again
+                if kill == KILLS:
+                    break
+                first_of_run = g
+                mapping_for = rng.uniform(0.3, 3.0 * PERIOD + 0.5)
+                t_end = time.time() + mapping_for
+                while time.time() < t_end:
+                    feeder.publish(g)
+                    g += 1
+                    time.sleep(1.0 / RATE)
+                # The node has inserted first_of_run + clouds_inserted scans (in order, none
+                # dropped: the queue holds 100); the kill lands while it maps, at a random phase
+                # of the autosave period.
+                status = node.status
+                last_inserted = first_of_run + (status.clouds_inserted if status else 0)
+                self.assertIsNotNone(status)
+                self.assertEqual(status.clouds_dropped_queue + status.clouds_dropped_invalid +
+                                 status.clouds_dropped_tf, 0, status.last_error)
+                node.kill()
+                node = None
+                g = last_inserted
+            finally:
+                if node is not None:
+                    node.stop()
+        # Started once more: it autosaves and removes whatever a killed writer left.
+        node = Node("autosave_kill", log_path, **params)
+        self.assertTrue(feeder.wait_connected())
+        feeder.publish(g)
+        self.assertIsNotNone(node.wait_status(lambda s: s.autosaves_written >= 1, 10 * PERIOD + 30))
+        node.stop()
+        self.assertEqual(files(os.path.dirname(autosave)), ["map.autosave.ot"])
+        if lost_seconds:
+            print("[autosave] %d kills, period %.1f s: seconds lost mean %.2f, max %.2f; scans "
+                  "lost mean %.1f, max %d" % (len(lost_seconds), PERIOD,
+                                              sum(lost_seconds) / len(lost_seconds),
+                                              max(lost_seconds),
+                                              sum(lost_scans) / len(lost_scans), max(lost_scans)))
+
+    def test_saves_into_a_full_or_read_only_filesystem_fail_cleanly_and_mapping_goes_on(self):
+        mount_dir = os.path.join(self.dir, "small_fs")
+        os.makedirs(mount_dir)
+        mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", mount_dir],
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        if mounted.returncode != 0:
+            self.skipTest("cannot mount a tmpfs here (%s): needs root" % mounted.stdout.strip())
+        node = None
+        try:
+            autosave = os.path.join(mount_dir, "map.autosave.ot")
+            saved = os.path.join(mount_dir, "saved.ot")
+            node = Node("autosave_disk", os.path.join(self.dir, "disk_node.log"),
+                        autosave_period=0.5, autosave_path=autosave, insert_queue_size=100)
+            feeder = Feeder("autosave_disk")
+            self.assertTrue(feeder.wait_connected())
+            g = 0
+            for _ in range(20):
+                feeder.publish(g)
+                g += 1
+                time.sleep(0.02)
+            self.assertIsNotNone(node.wait_status(lambda s: s.clouds_inserted >= 20 and
+                                                  s.autosaves_written >= 1))
+            self.assertTrue(node.save(saved).success)
+            previous = {p: open(p, "rb").read() for p in (saved, autosave)}
+            # Nearly full: a filler leaves 2 KiB; the map (> 2 KiB with its header) cannot fit.
+            filler = os.path.join(mount_dir, "filler")
+            with open(filler, "wb", buffering=0) as f:
+                try:
+                    while True:
+                        f.write(b"x" * 4096)
+                        f.flush()
+                except OSError:
+                    pass
+            os.truncate(filler, os.path.getsize(filler) - 2048)
+            for case, reason in (("full", "No space left on device"),
+                                 ("read-only", "Read-only file system")):
+                if case == "read-only":
+                    os.remove(filler)
+                    subprocess.run(["mount", "-o", "remount,ro", mount_dir], check=True)
+                failed_before = node.status.autosaves_failed
+                inserted_before = node.status.clouds_inserted
+                reply = node.save(saved)
+                self.assertFalse(reply.success, case)
+                self.assertIn(saved, reply.message)
+                self.assertIn(reason, reply.message)
+                for _ in range(20):  # the node goes on mapping
+                    feeder.publish(g)
+                    g += 1
+                    time.sleep(0.02)
+                # (An autosave begun before the remount may still fail for the full disk.)
+                status = node.wait_status(lambda s: s.clouds_inserted >= inserted_before + 20 and
+                                          s.autosaves_failed > failed_before and
+                                          reason in s.last_error)
+                self.assertIsNotNone(status, "%s: no failed autosave or mapping stopped" % case)
+                self.assertIn(reason, status.last_error)
+                for path, data in previous.items():
+                    self.assertEqual(open(path, "rb").read(), data, "%s: %s changed" % (case, path))
+                self.assertEqual([f for f in files(mount_dir) if ".evidential-tmp." in f], [])
+        finally:
+            if node is not None:
+                node.stop()
+            subprocess.run(["umount", "-l", mount_dir])
+
+
+if __name__ == "__main__":
+    rostest.rosrun("evidential_octomap", "autosave_recovery", AutosaveRecoveryTest)
