@@ -322,6 +322,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   void followEvidence(const std::vector<float>& evidence);  // adds a scan to the statistic
   void followEvidenceStatistic();                          // reads with the cap it gives
   std::unique_ptr<FusionRule> makeRule(const SemanticConfig& config) const;
+  double capOf(const SemanticConfig& config) const;  // the cap `config` reads with here
 
   // Registers the tree type with AbstractOcTree (the ColorOcTree pattern).
   class StaticMemberInitializer {

@@ -186,19 +186,19 @@ void EvidentialOcTree::followEvidenceStatistic() {
 }
 
 double EvidentialOcTree::effectiveEvidenceCap() const {
-  if (config_.evidence_cap != SemanticConfig::kAdaptiveCap) return config_.evidence_cap;
-  return evidence_points_ ? SemanticConfig::adaptiveEvidenceCap(meanPointLogEvidence())
-                          : SemanticConfig::kCapWithoutStatistic;
+  return capOf(config_);
 }
 
 std::unique_ptr<FusionRule> EvidentialOcTree::makeRule(const SemanticConfig& config) const {
   SemanticConfig resolved = config;
-  if (config.evidence_cap == SemanticConfig::kAdaptiveCap) {
-    resolved.evidence_cap = evidence_points_
-                                ? SemanticConfig::adaptiveEvidenceCap(meanPointLogEvidence())
-                                : SemanticConfig::kCapWithoutStatistic;
-  }
+  resolved.evidence_cap = capOf(config);
   return FusionRule::create(resolved);
+}
+
+double EvidentialOcTree::capOf(const SemanticConfig& config) const {
+  if (config.evidence_cap != SemanticConfig::kAdaptiveCap) return config.evidence_cap;
+  return evidence_points_ ? SemanticConfig::adaptiveEvidenceCap(meanPointLogEvidence())
+                          : SemanticConfig::kCapWithoutStatistic;
 }
 
 InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& points_S,
