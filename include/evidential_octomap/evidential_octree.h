@@ -268,6 +268,10 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // leaf's payload += from - prior (addPayload), stored.
   void addToLeaf(EvidentialOcTreeNode* leaf, const float* from, Edit& edit);
   void releaseLeafPayload(EvidentialOcTreeNode* leaf, Edit& edit);
+  // A clearing observation of a leaf: its payload discounted, released below kReleasedEvidence
+  // (SemanticConfig::clearing_observations; clearing_discount.cpp).
+  void discountClearedLeaf(EvidentialOcTreeNode* leaf, Edit& edit);
+  bool discountsClearings() const { return config_.clearing_observations > 0; }
   void expandLeaf(EvidentialOcTreeNode* node, Edit& edit);
   bool pruneChildren(EvidentialOcTreeNode* node, Edit& edit);
   void linkSummary(EvidentialOcTreeNode* node) const;

@@ -105,6 +105,23 @@ struct SemanticConfig {
   // map. 0.01 (1 % of one class's prior weight) makes learned evidence as cheap as one-hot
   // (docs/benchmarks.md measures cost and map quality). An insertion setting: not stored.
   double evidence_floor = 0.0;
+  // Moving objects leave no ghosts: each clearing observation of a voxel (a ray of a scan passes
+  // through it and ends elsewhere) discounts the semantic evidence it holds, before the scan's
+  // new evidence is added, so that after `clearing_observations` clearings without new evidence
+  // the voxel answers no class (its payload is released). Discounting keeps every class's share
+  // (dempster: L^c scaled; sbki/ebs: alpha^c - prior scaled), so a voxel that is hit and only
+  // sometimes passed through keeps its class. 0: off. An insertion setting: not stored in the map.
+  // Sequential mapping only: a merge of chunk maps cannot apply one chunk's clearings to another
+  // chunk's evidence, so batch mapping equals sequential mapping with this setting at 0.
+  int clearing_observations = 0;
+  static constexpr int kMaxClearingObservations = 1000;
+  // Evidence (sum over classes of payload - prior) below which a discounted payload is released.
+  static constexpr double kReleasedEvidence = 0.01;
+  // The factor each clearing keeps: (kReleasedEvidence / 2 / kMaxStoredLogEvidence)^(1 / K), so
+  // that K clearings bring even the largest dempster payload below kReleasedEvidence (to half of
+  // it, a margin for float rounding); 1 when off.
+  double clearingKeep() const;
+
   // Threads for the semantic pass (0 = OpenMP default).
   int threads = 0;
 

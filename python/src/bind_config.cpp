@@ -59,6 +59,9 @@ void bindConfig(nb::module_& m) {
               "Semantic evidence only for occupied voxels and the scan's end voxels (live).")
       .def_rw("evidence_floor", &SemanticConfig::evidence_floor,
               "Point evidence below this counts as 0 (0: off; an insertion setting).")
+      .def_rw("clearing_observations", &SemanticConfig::clearing_observations,
+              "Clearings after which a voxel's class evidence is gone (0: off; an insertion "
+              "setting, sequential mapping only).")
       .def_rw("threads", &SemanticConfig::threads,
               "Threads of the semantic pass (0: OpenMP default).")
       .def("__repr__", [](const SemanticConfig& c) {

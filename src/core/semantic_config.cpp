@@ -50,6 +50,8 @@ std::string SemanticConfig::problem() const {
   if (!(ds_multiplier <= kMaxDsMultiplier))  // <= 0 (and -inf) switch down-sampling off
     return outOfRange("ds_multiplier", ds_multiplier, "<= 1000 (<= 0: off)");
   if (std::isnan(max_range)) return outOfRange("max_range", max_range, "a number (< 0: unlimited)");
+  if (!(clearing_observations >= 0 && clearing_observations <= kMaxClearingObservations))
+    return outOfRange("clearing_observations", clearing_observations, "in [0, 1000] (0: off)");
   if (!(threads >= 0 && threads <= kMaxThreads))
     return outOfRange("threads", threads, "in [0, 1024] (0: OpenMP default)");
   if (!std::isfinite(maxSupportLength()))
@@ -99,7 +101,13 @@ void SemanticConfig::print(std::ostream& out) const {
       << "fast_free_space: " << (fast_free_space ? "true" : "false") << "\n"
       << "semantic_occupied_only: " << (semantic_occupied_only ? "true" : "false") << "\n"
       << "evidence_floor: " << evidence_floor << "\n"
+      << "clearing_observations: " << clearing_observations << "\n"
       << "threads: " << threads << "\n";
+}
+
+double SemanticConfig::clearingKeep() const {
+  if (clearing_observations <= 0) return 1.0;
+  return std::pow(0.5 * kReleasedEvidence / kMaxStoredLogEvidence, 1.0 / clearing_observations);
 }
 
 double SemanticConfig::adaptiveEvidenceCap(double mean_point_log_evidence) {

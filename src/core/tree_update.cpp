@@ -196,7 +196,7 @@ void EvidentialOcTree::applyTopRecurs(EvidentialOcTreeNode* node, unsigned depth
     // change nothing (OctoMap's early abort); anything else splits it.
     const bool at_min = node->getLogOdds() <= clamping_thres_min;
     const bool at_max = node->getLogOdds() >= clamping_thres_max;
-    bool unchanged = at_min || at_max;
+    bool unchanged = (at_min || at_max) && !(discountsClearings() && node->hasSemantics());
     for (const SubtreeSeed* s = begin; unchanged && s != end; ++s) {
       unchanged = !(s->flags & SubtreeSeed::kMayHaveRows) &&
                   !(at_min && (s->flags & SubtreeSeed::kHasHit)) &&
@@ -248,6 +248,7 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
   if (depth == tree_depth) {  // one voxel, one merged update
     if (begin->occupancy != 0) {
       updateNodeLogOdds(node, begin->occupancy > 0 ? prob_hit_log : prob_miss_log);
+      if (begin->occupancy < 0 && discountsClearings()) discountClearedLeaf(node, edit);
     }
     if (begin->increments == VoxelUpdate::kNoIncrements) return 0;
     float values[kMaxClasses];
@@ -261,7 +262,7 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
     // change nothing (OctoMap's early abort); anything else splits it.
     const bool at_min = node->getLogOdds() <= clamping_thres_min;
     const bool at_max = node->getLogOdds() >= clamping_thres_max;
-    bool unchanged = at_min || at_max;
+    bool unchanged = (at_min || at_max) && !(discountsClearings() && node->hasSemantics());
     for (const VoxelUpdate* u = begin; unchanged && u != end; ++u) {
       unchanged = u->increments == VoxelUpdate::kNoIncrements &&
                   ((at_min && u->occupancy < 0) || (at_max && u->occupancy > 0));

@@ -111,6 +111,7 @@ void readSemanticConfig(const ros::NodeHandle& nh, double resolution, SemanticCo
   nh.param("fast_free_space", c.fast_free_space, c.fast_free_space);
   nh.param("semantic_occupied_only", c.semantic_occupied_only, c.semantic_occupied_only);
   nh.param("evidence_floor", c.evidence_floor, c.evidence_floor);
+  nh.param("clearing_observations", c.clearing_observations, c.clearing_observations);
   std::string problem = c.problem();
   if (problem.empty()) problem = c.supportProblem(resolution);
   if (!problem.empty()) throw std::invalid_argument("~parameters refused: " + problem);

@@ -86,6 +86,10 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
                   "Semantic evidence only for occupied voxels and this scan's end voxels, for "
                   "live use: about 4x less kernel work (not exact; true/false)")
       ->capture_default_str();
+  cmd->add_option("--clearing-observations", c->clearing_observations,
+                  "Clearings (rays passing through) after which a voxel's class evidence is "
+                  "gone: moving objects leave no ghosts (0: off; sequential mapping only)")
+      ->capture_default_str();
   cmd->add_option("--evidence-floor", c->evidence_floor,
                   "Point evidence below this counts as 0 (0: off; 0.01 makes learned evidence "
                   "about as cheap as one-hot)")

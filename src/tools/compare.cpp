@@ -96,6 +96,15 @@ bool setParameter(const std::string& key, const std::string& value, SemanticConf
     (key == "fast_free_space" ? c->fast_free_space : c->semantic_occupied_only) = value == "1";
     return true;
   }
+  if (key == "clearing_observations") {  // the one integer field
+    try {
+      size_t used = 0;
+      c->clearing_observations = std::stoi(value, &used);
+      return used == value.size();
+    } catch (const std::exception&) {
+      return false;
+    }
+  }
   if (key == "downsampling" || key == "kernel_distance") {
     (key == "downsampling" ? c->downsampling : c->kernel_distance) = value;
     return !value.empty();
