@@ -112,7 +112,7 @@ def test_origin_and_pose_are_exclusive():
     tree = eo.EvidentialOcTree(0.2, 3)
     points, evidence = wall()
     with pytest.raises(ValueError, match="exactly one of origin"):
-        tree.insert_scan(points, evidence)
+        tree.insert_scan(points, evidence, origin=ORIGIN)
     with pytest.raises(ValueError, match="exactly one of origin"):
         tree.insert_scan(points, evidence, origin=ORIGIN, pose=np.eye(4))
 
@@ -243,3 +243,15 @@ def test_read_calibration_refuses_a_bad_file_with_its_line(tmp_path):
         eo.read_calibration(str(path))
     with pytest.raises(RuntimeError, match="cannot read"):
         eo.read_calibration(str(tmp_path / "missing.yaml"))
+
+
+def test_the_adaptive_cap_follows_the_inserted_evidence():
+    tree = eo.EvidentialOcTree(0.2, 3)
+    assert tree.effective_evidence_cap == 3.0  # before any evidence
+    points = np.array([[2.0, 0.0, 0.0], [2.0, 0.4, 0.0], [2.0, -0.4, 0.0], [2.0, 0.8, 0.0]])
+    evidence = np.zeros((4, 3), np.float32)
+    evidence[:, 1] = 30.0
+    tree.insert_scan(points, evidence, origin=ORIGIN)
+    m = np.log1p(30.0 / 3)
+    assert tree.mean_point_log_evidence == pytest.approx(m)
+    assert tree.effective_evidence_cap == pytest.approx(3.7 * m ** 0.4)
