@@ -99,6 +99,30 @@ def targets(section):
         miou_cell, mark(not better_miou), thin_cell, mark(not thin)), all(checks))
 
 
+def write_targets(sections, w):
+    w("| dataset | protocol | evidence | ECE | Brier (Δ best other rule) | AUROC u | mIoU all % "
+      "(Δ best other rule, points) | classes below input IoU | all met |\n")
+    w("|---|---|---|---|---|---|---|---|---|\n")
+    met = 0
+    for key in sorted(sections, key=order):
+        row, ok = targets(sections[key])
+        met += ok
+        w("| %s | %s | %s %s %s |\n" % (dataset_name(key[0]), key[1], key[2], row,
+                                        "yes" if ok else "no"))
+    w("\n%d of %d sections meet every target.\n" % (met, len(sections)))
+
+
+def replace_block(path, text):
+    begin, end = "<!-- cross-dataset: begin -->", "<!-- cross-dataset: end -->"
+    with open(path) as f:
+        page = f.read()
+    if begin not in page or end not in page:
+        sys.exit("%s: no %s ... %s block" % (path, begin, end))
+    head, rest = page.split(begin, 1)
+    with open(path, "w") as f:
+        f.write(head + begin + "\n" + text + end + rest.split(end, 1)[1])
+
+
 def write_tables(sections, out):
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip()
@@ -115,16 +139,8 @@ def write_tables(sections, out):
       "u < %.2f or below the input's per-point AUROC; a rule with higher mIoU beyond the "
       "interval; a class with ≥ %d GT queries below the input's IoU (reconstruction only).\n\n"
       % (ECE_MAX, AUROC_MIN, THIN_MIN_QUERIES))
-    w("| dataset | protocol | evidence | ECE | Brier (Δ best other rule) | AUROC u | mIoU all % "
-      "(Δ best other rule, points) | classes below input IoU | all met |\n")
-    w("|---|---|---|---|---|---|---|---|---|\n")
-    met = 0
-    for key in sorted(sections, key=order):
-        row, ok = targets(sections[key])
-        met += ok
-        w("| %s | %s | %s %s %s |\n" % (dataset_name(key[0]), key[1], key[2], row,
-                                        "yes" if ok else "no"))
-    w("\n%d of %d sections meet every target.\n\n" % (met, len(sections)))
+    write_targets(sections, w)
+    w("\n")
     w("## Every rule\n\n| dataset | protocol | evidence | row | mIoU all % | Brier | Δ Brier "
       "vs dempster | ECE | AUROC u |\n|---|---|---|---|---|---|---|---|---|\n")
     for key in sorted(sections, key=order):
@@ -186,7 +202,7 @@ def plot_reliability(sections, png):
 
 
 def main():
-    if len(sys.argv) != 4:
+    if len(sys.argv) not in (4, 5):
         sys.exit(__doc__)
     sections = load_sections(sys.argv[1])
     if not sections:
@@ -195,6 +211,11 @@ def main():
         write_tables(sections, out)
         out.write("\n![Reliability diagrams](images/%s)\n" % os.path.basename(sys.argv[3]))
     plot_reliability(sections, sys.argv[3])
+    if len(sys.argv) == 5:
+        lines = []
+        write_targets(sections, lines.append)
+        figure = os.path.relpath(sys.argv[3], os.path.dirname(os.path.abspath(sys.argv[4])))
+        replace_block(sys.argv[4], "".join(lines) + "\n![Reliability diagrams](%s)\n" % figure)
 
 
 if __name__ == "__main__":
