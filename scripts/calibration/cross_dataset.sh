@@ -13,6 +13,7 @@ out="${1:-${root}/out/cross_dataset}"
 cli="${CLI:-${root}/build/core/src/tools/evidential_octomap}"
 scans="${SCANS:-24}"
 mkdir -p "${out}"
+git -C "${root}" rev-parse --short HEAD > "${out}/commit.txt"
 variants="dempster,sbki,ebs,reference_compat"
 generated=(
   "forest_good --scene forest --sensor os1-64 --seed 21 --network good"

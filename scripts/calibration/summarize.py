@@ -123,12 +123,20 @@ def replace_block(path, text):
         f.write(head + begin + "\n" + text + end + rest.split(end, 1)[1])
 
 
-def write_tables(sections, out):
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                            text=True).stdout.strip()
+def run_commit(root):
+    """The commit the compare runs were made at (cross_dataset.sh records it), else HEAD."""
+    try:
+        with open(os.path.join(root, "commit.txt")) as f:
+            return f.read().strip()
+    except OSError:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True).stdout.strip()
+
+
+def write_tables(sections, out, commit):
     w = out.write
     w("# Cross-dataset tables\n\nProduced by `scripts/calibration/cross_dataset.sh` and "
-      "`scripts/calibration/summarize.py` (commit %s, %s). Generated datasets are **synthetic** "
+      "`scripts/calibration/summarize.py` (runs at commit %s, tables %s). Generated datasets are **synthetic** "
       "(`evidential_octomap generate`, [data.md](data.md)); none of them, nor the bundled or "
       "RELLIS-3D data, was used to choose the adaptive cap's constants "
       "([calibration.md](calibration.md)). Every row of a section uses the same queries. "
@@ -166,7 +174,7 @@ def order(key):
             protocol != "reconstruction", evidence)
 
 
-def plot_reliability(sections, png):
+def plot_reliability(sections, png, commit):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -193,8 +201,6 @@ def plot_reliability(sections, png):
         ax.axis("off")
     fig.supxlabel("confidence (max projected probability)", fontsize=9)
     fig.supylabel("accuracy", fontsize=9)
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                            text=True).stdout.strip()
     fig.suptitle("Reliability per dataset, reconstruction protocol (generated datasets are "
                  "SYNTHETIC); commit %s, %s" % (commit, datetime.date.today()), fontsize=9)
     fig.tight_layout()
@@ -207,15 +213,18 @@ def main():
     sections = load_sections(sys.argv[1])
     if not sections:
         sys.exit("%s: no compare_*/compare.json" % sys.argv[1])
+    commit = run_commit(sys.argv[1])
     with open(sys.argv[2], "w") as out:
-        write_tables(sections, out)
+        write_tables(sections, out, commit)
         out.write("\n![Reliability diagrams](images/%s)\n" % os.path.basename(sys.argv[3]))
-    plot_reliability(sections, sys.argv[3])
+    plot_reliability(sections, sys.argv[3], commit)
     if len(sys.argv) == 5:
         lines = []
         write_targets(sections, lines.append)
         figure = os.path.relpath(sys.argv[3], os.path.dirname(os.path.abspath(sys.argv[4])))
-        replace_block(sys.argv[4], "".join(lines) + "\n![Reliability diagrams](%s)\n" % figure)
+        replace_block(sys.argv[4], "Runs at commit %s, %s (scripts/calibration/cross_dataset.sh)."
+                      "\n\n%s\n![Reliability diagrams](%s)\n"
+                      % (commit, datetime.date.today(), "".join(lines), figure))
 
 
 if __name__ == "__main__":
