@@ -112,7 +112,7 @@ def test_origin_and_pose_are_exclusive():
     tree = eo.EvidentialOcTree(0.2, 3)
     points, evidence = wall()
     with pytest.raises(ValueError, match="exactly one of origin"):
-        tree.insert_scan(points, evidence, origin=ORIGIN)
+        tree.insert_scan(points, evidence)
     with pytest.raises(ValueError, match="exactly one of origin"):
         tree.insert_scan(points, evidence, origin=ORIGIN, pose=np.eye(4))
 
