@@ -36,6 +36,10 @@ done
 ((quick)) || bench_args=(--steps 30 ${bench_args[@]+"${bench_args[@]}"})
 
 log() { echo "bench.sh: $*" >&2; }
+# The code measured: stamped now, before the build, since the tree may change during a long run.
+commit="$(git -C "${root}" rev-parse --short HEAD 2>/dev/null || echo unknown)"
+dirty=""
+git -C "${root}" diff --quiet HEAD -- include src/core CMakeLists.txt 2>/dev/null || dirty=" (+ uncommitted core changes)"
 
 # --- build (Release) ----------------------------------------------------------------------------
 if grep -q 'add_subdirectory(bench)' "${root}/CMakeLists.txt"; then
@@ -101,9 +105,6 @@ fi
 # --- docs ---------------------------------------------------------------------------------------
 if ((write_docs)); then
   cpu="$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
-  commit="$(git -C "${root}" rev-parse --short HEAD 2>/dev/null || echo unknown)"
-  dirty=""
-  git -C "${root}" diff --quiet HEAD -- include src/core CMakeLists.txt 2>/dev/null || dirty=" (+ uncommitted core changes)"
   mkdir -p "${root}/bench/results" "${root}/docs"
   cp "${out_json}" "${root}/bench/results/benchmarks.json"
   {
