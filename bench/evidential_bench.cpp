@@ -64,7 +64,8 @@ struct Options {
   int steps = 0;   // inserts: 0 = scans (one pass); more = the revisit order (revisitOrder)
   double resolution = 0.2;
   int repeats = 1;
-  bool quick = false;  // fewer scans and methods: under 3 minutes
+  std::vector<double> ranges = {-1.0, 50.0};  // max ranges, each its own interleaved run
+  bool quick = false;                         // fewer scans and methods: under 3 minutes
   std::string json_path;
   std::string md_path;
   std::string learned_model;  // default: next to the class table (defaultLearnedModel)
@@ -257,6 +258,16 @@ int rssChild(const Options& o) {
   return 0;
 }
 
+// "-1,50" -> {-1, 50}.
+std::vector<double> parseRanges(const std::string& text) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) out.push_back(std::stod(item));
+  if (out.empty()) throw std::invalid_argument("--ranges needs a comma-separated list");
+  return out;
+}
+
 Options parse(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
@@ -273,6 +284,8 @@ Options parse(int argc, char** argv) {
       o.scans = std::stoi(next());
     else if (a == "--steps")
       o.steps = std::stoi(next());
+    else if (a == "--ranges")
+      o.ranges = parseRanges(next());
     else if (a == "--resolution")
       o.resolution = std::stod(next());
     else if (a == "--repeats")
@@ -291,7 +304,8 @@ Options parse(int argc, char** argv) {
       o.rss_range = std::stod(next());
     else if (a == "--help" || a == "-h") {
       std::cout << "evidential_bench [--data DIR] [--classes YAML] [--scans N] [--steps N]\n"
-                   "  [--resolution R] [--repeats N] [--quick] [--json PATH] [--md PATH]\n"
+                   "  [--resolution R] [--repeats N] [--quick] [--ranges -1,50] [--json PATH] "
+                   "[--md PATH]\n"
                    "  [--learned-model PATH]\n"
                    "--steps: inserts; more than --scans drives the scans forth and back at their "
                    "poses (0..9, 8..0, 1..9, ...); rows then give the first pass and the steady "
@@ -540,7 +554,7 @@ int main(int argc, char** argv) try {
 
   Report report;
   std::vector<RangeRun> runs;
-  for (double range : {-1.0, 50.0}) {
+  for (double range : o.ranges) {
     runs.push_back(buildRun(range, o.quick));
     for (int rep = 0; rep < o.repeats; ++rep)
       runInterleaved(&runs.back(), scans, order, evidence, learned, o.resolution, num_classes, rep);

@@ -150,9 +150,15 @@ if ((write_docs)); then
         [[ -f "${sequences}/long_${m}.csv" ]] && long+=(--long "${m}=${sequences}/long_${m}.csv")
       done
       /usr/bin/python3 "${root}/bench/sequence_report.py" --revisit "${sequences}/revisit.csv" \
-        --long-label "Long sequence: SYNTHETIC generated forest trail, 500 scans, 1 km" \
+        --long-label "Long sequence: SYNTHETIC generated forest trail (2 m a scan)" \
         ${long[@]+"${long[@]}"} --png "${root}/docs/images/bench_cpu_per_scan.png" \
         --png-link images/bench_cpu_per_scan.png
+      if [[ -f "${sequences}/profile.md" ]]; then
+        echo
+        echo "### Profile of the exact insert (scripts/bench_profile.sh)"
+        echo
+        cat "${sequences}/profile.md"
+      fi
     fi
   } >"${root}/docs/benchmarks.md"
   log "wrote docs/benchmarks.md and bench/results/benchmarks.json"

@@ -7,7 +7,7 @@
 #
 # 1. revisit: the bundled scans driven forth and back at their real poses, 60 inserts, plain,
 #    exact and live interleaved in one process (the ratios);
-# 2. long: a SYNTHETIC generated off-road sequence (500 scans at 2 m a scan, 1 km), generated
+# 2. long: a SYNTHETIC generated off-road sequence (520 scans at 2 m a scan, 1.04 km), generated
 #    into OUT/long_forest when absent (EVIDENTIAL_OCTOMAP_CLI: the CLI that generates it), each
 #    method alone in its process: its cost as the map grows and its own RSS after every scan.
 # Each takes 10 minutes to hours on 2 shared cores; nothing here runs in CI.
@@ -18,7 +18,7 @@ out="$2"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cli="${EVIDENTIAL_OCTOMAP_CLI:-${root}/build/core/src/tools/evidential_octomap}"
 long="${out}/long_forest"
-generate=(generate --scene forest --sensor os1-64 --scans 500 --seed 7 --route line
+generate=(generate --scene forest --sensor os1-64 --scans 520 --seed 7 --route line
           --route-length 1100 --speed 20 --quiet --out "${long}")
 mkdir -p "${out}"
 cd "${root}"
@@ -49,3 +49,5 @@ long_args=(--data "${long}" --classes "${long}/classes.yaml" --order forward)
 for method in exact live plain; do
   run "long_${method}" "${long_args[@]}" --only "${method}"
 done
+meta "profile: scripts/bench_profile.sh (perf), start $(date -u '+%Y-%m-%d %H:%M UTC'), load $(load)"
+bash "${root}/scripts/bench_profile.sh" "${bin}" "${out}"
