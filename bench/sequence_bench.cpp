@@ -27,7 +27,7 @@ namespace {
 
 struct Options {
   std::string data, classes, csv = "sequence.csv", order = "revisit", only;
-  int scans = 10;  // revisit: distinct scans; forward: 0 = every scan of the folder
+  int scans = 0;   // revisit: distinct scans (0: 10); forward: the first N (0: every scan)
   int steps = 60;  // revisit only
   double range = 50.0, resolution = 0.2;
 };
@@ -89,8 +89,9 @@ class ScanSource {
   explicit ScanSource(const Options& o)
       : sequence_(o.data, o.classes), revisit_(o.order == "revisit") {
     if (revisit_) {
-      for (int i = 0; i < o.scans; ++i) cache_.push_back(sequence_.load(i));
-      order_ = evbench::revisitOrder(o.scans, o.steps);
+      const int n = o.scans > 0 ? o.scans : 10;
+      for (int i = 0; i < n; ++i) cache_.push_back(sequence_.load(i));
+      order_ = evbench::revisitOrder(n, o.steps);
     } else {
       const int n =
           o.scans > 0 ? std::min<int>(o.scans, int(sequence_.size())) : int(sequence_.size());
