@@ -14,7 +14,9 @@
 
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -34,32 +36,24 @@ struct Options {
 
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto next = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--data")
-      o.data = next();
-    else if (a == "--classes")
-      o.classes = next();
-    else if (a == "--csv")
-      o.csv = next();
-    else if (a == "--order")
-      o.order = next();
-    else if (a == "--only")
-      o.only = next();
-    else if (a == "--scans")
-      o.scans = std::stoi(next());
-    else if (a == "--steps")
-      o.steps = std::stoi(next());
-    else if (a == "--range")
-      o.range = std::stod(next());
-    else if (a == "--resolution")
-      o.resolution = std::stod(next());
-    else
-      throw std::invalid_argument("unknown argument " + a + " (see the top of sequence_bench.cpp)");
+  // Every option takes a value: the table says where it goes.
+  const std::map<std::string, std::function<void(const std::string&)>> options = {
+      {"--data", [&](const std::string& v) { o.data = v; }},
+      {"--classes", [&](const std::string& v) { o.classes = v; }},
+      {"--csv", [&](const std::string& v) { o.csv = v; }},
+      {"--order", [&](const std::string& v) { o.order = v; }},
+      {"--only", [&](const std::string& v) { o.only = v; }},
+      {"--scans", [&](const std::string& v) { o.scans = std::stoi(v); }},
+      {"--steps", [&](const std::string& v) { o.steps = std::stoi(v); }},
+      {"--range", [&](const std::string& v) { o.range = std::stod(v); }},
+      {"--resolution", [&](const std::string& v) { o.resolution = std::stod(v); }}};
+  for (int i = 1; i < argc; i += 2) {
+    const auto option = options.find(argv[i]);
+    if (option == options.end())
+      throw std::invalid_argument(std::string("unknown argument ") + argv[i] +
+                                  " (see the top of sequence_bench.cpp)");
+    if (i + 1 >= argc) throw std::invalid_argument(std::string(argv[i]) + " needs a value");
+    option->second(argv[i + 1]);
   }
   if (o.data.empty() || o.classes.empty())
     throw std::invalid_argument("--data and --classes needed");

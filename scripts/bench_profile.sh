@@ -13,12 +13,13 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 mkdir -p "${out}"
 cd "${root}"
 args=(--data data/semantickitti_08_first10 --classes config/classes_semantickitti.yaml
-      --order revisit --scans 10 --steps 30 --only exact --csv "${out}/profile_steps.csv")
+      --order revisit --scans 10 --steps 30 --only exact)
 load_before="$(cut -d' ' -f1-3 /proc/loadavg)"
 OMP_NUM_THREADS=2 OMP_WAIT_POLICY=passive nice -n 10 \
-  perf record -q -F 499 -o "${out}/perf.data" "${bin}" "${args[@]}" 2>/dev/null
+  perf record -q -F 499 -o "${out}/perf.data" "${bin}" "${args[@]}" --csv "${out}/profile_steps.csv" \
+  2>/dev/null
 {
-  echo "\`perf record -F 499 evidential_sequence_bench ${args[*]% --csv*}\` ($(date -u '+%Y-%m-%d %H:%M UTC'),"
+  echo "\`perf record -F 499 evidential_sequence_bench ${args[*]}\` ($(date -u '+%Y-%m-%d %H:%M UTC'),"
   echo "commit $(git rev-parse --short HEAD), load average ${load_before} before, all 30 inserts:"
   echo "first pass and steady state). Self time of each function, share of all samples:"
   echo
