@@ -11,6 +11,8 @@
 #   scripts/bench.sh --no-docs        # measure and compare only; write nothing in the tree
 #   scripts/bench.sh --sequences DIR  # take the sequence figures scripts/bench_sequences.sh wrote
 #                                     # into DIR (stamped there) instead of measuring them again
+#   scripts/bench.sh --docs-only --sequences DIR  # rewrite the docs from the last run's results
+#                                     # (its stamps kept), e.g. once longer sequences are measured
 #   BUILD_DIR=/tmp/b scripts/bench.sh # build elsewhere (default: build/bench-release)
 # Any other argument is passed to evidential_bench (see evidential_bench --help).
 set -euo pipefail
@@ -21,6 +23,7 @@ jobs="${JOBS:-$(nproc)}"
 given=("$@")
 write_docs=1
 quick=0
+docs_only=0
 sequences=""
 bench_args=()
 while (($#)); do
@@ -28,6 +31,7 @@ while (($#)); do
     --no-docs) write_docs=0 ;;
     --quick) write_docs=0; quick=1; bench_args+=("$1") ;;
     --sequences) sequences="$(cd "$2" && pwd)"; shift ;;
+    --docs-only) docs_only=1 ;;
     *) bench_args+=("$1") ;;
   esac
   shift
@@ -41,6 +45,15 @@ commit="$(git -C "${root}" rev-parse --short HEAD 2>/dev/null || echo unknown)"
 dirty=""
 git -C "${root}" diff --quiet HEAD -- include src/core CMakeLists.txt 2>/dev/null || dirty=" (+ uncommitted core changes)"
 
+out_json="${build}/benchmarks.json"
+out_md="${build}/benchmarks.tables.md"
+stamp="${build}/benchmarks.stamp"
+if ((docs_only)); then
+  # The last run's stamps (date, commit, load, command), written when it measured.
+  [[ -f "${stamp}" ]] || { log "no ${stamp}: run scripts/bench.sh first"; exit 1; }
+  # shellcheck disable=SC1090
+  source "${stamp}"
+else
 # --- build (Release) ----------------------------------------------------------------------------
 if grep -q 'add_subdirectory(bench)' "${root}/CMakeLists.txt"; then
   mkdir -p "${build}"
@@ -69,8 +82,6 @@ fi
 
 # --- run ----------------------------------------------------------------------------------------
 cd "${root}"
-out_json="${build}/benchmarks.json"
-out_md="${build}/benchmarks.tables.md"
 baseline="${root}/bench/results/benchmarks.json"
 previous=""
 if [[ -f "${baseline}" ]]; then
@@ -87,6 +98,7 @@ started="$(date -u '+%Y-%m-%d %H:%M UTC')"
 log "running: ${command[*]}"
 "${command[@]}"
 load_after="$(cut -d' ' -f1-3 /proc/loadavg)"
+declare -p commit dirty started load_before load_after given bench_args >"${stamp}"
 
 # --- the revisit and the long sequence -----------------------------------------------------------
 if ((!quick)) && [[ -z "${sequences}" ]]; then
@@ -101,6 +113,9 @@ if [[ -n "${previous}" ]]; then
   echo "==== compared with the committed bench/results/benchmarks.json ===="
   python3 "${root}/bench/compare_summary.py" "${previous}" "${out_json}" || true
 fi
+
+fi  # docs_only
+cd "${root}"
 
 # --- docs ---------------------------------------------------------------------------------------
 if ((write_docs)); then
@@ -122,7 +137,7 @@ if ((write_docs)); then
     echo "| date | ${started} |"
     echo "| code | commit ${commit}${dirty}, Release |"
     echo "| load average (1/5/15 min) before / after | ${load_before} / ${load_after} |"
-    echo "| command | \`scripts/bench.sh${*:+ $*}\`, which ran \`OMP_NUM_THREADS=2 OMP_WAIT_POLICY=passive evidential_bench --data data/semantickitti_08_first10 --classes config/classes_semantickitti.yaml${bench_args[*]:+ ${bench_args[*]}}\` |"
+    echo "| command | \`scripts/bench.sh${given[*]:+ ${given[*]}}\`, which ran \`OMP_NUM_THREADS=2 OMP_WAIT_POLICY=passive evidential_bench --data data/semantickitti_08_first10 --classes config/classes_semantickitti.yaml${bench_args[*]:+ ${bench_args[*]}}\` |"
     echo "| data | SemanticKITTI 08 scans 0–9 (123k points each) in the world frame, resolution 0.2 m, evidence **derived** from the predictions: one-hot × 20 over C = 20 classes; rows marked *learned (cross-fitted)*: the bundled model's evidence (\`config/learned/semantickitti.model\`, each scan from the fold not trained on it), computed before timing |"
     echo
     echo "The methods take turns scan by scan (each keeps its own map), so a change of the shared"
