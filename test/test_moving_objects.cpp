@@ -17,7 +17,7 @@ namespace {
 constexpr int kClasses = 4;
 constexpr int kGround = 0, kPerson = 1, kWall = 2;
 constexpr float kEvidence = 10.0f;  // one-hot evidence of the true class (derived)
-constexpr int kClearings = 5;       // clearing_observations of the maps that discount
+constexpr int kClearings = 3;       // clearing_observations of the maps that discount
 
 // The street: ground z = 0.1, a wall at x = 20.1 m (both mid-voxel), the person's box (when present).
 struct Street {

@@ -106,8 +106,8 @@ struct SemanticConfig {
   // (docs/benchmarks.md measures cost and map quality). An insertion setting: not stored.
   double evidence_floor = 0.0;
   // Moving objects leave no ghosts: each clearing observation of a voxel (a ray of a scan passes
-  // through it and ends elsewhere) discounts the semantic evidence it holds, before the scan's
-  // new evidence is added, so that after `clearing_observations` clearings without new evidence
+  // through it and no ray ends in it) discounts the semantic evidence it holds after the scan,
+  // the kernel evidence this scan spread into it included (the scan itself saw it empty), so that after `clearing_observations` clearings without new evidence
   // the voxel answers no class (its payload is released). Discounting keeps every class's share
   // (dempster: L^c scaled; sbki/ebs: alpha^c - prior scaled), so a voxel that is hit and only
   // sometimes passed through keeps its class. 0: off. An insertion setting: not stored in the map.

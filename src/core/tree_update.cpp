@@ -248,13 +248,17 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
   if (depth == tree_depth) {  // one voxel, one merged update
     if (begin->occupancy != 0) {
       updateNodeLogOdds(node, begin->occupancy > 0 ? prob_hit_log : prob_miss_log);
-      if (begin->occupancy < 0 && discountsClearings()) discountClearedLeaf(node, edit);
     }
-    if (begin->increments == VoxelUpdate::kNoIncrements) return 0;
+    const bool cleared = begin->occupancy < 0 && discountsClearings();
+    if (begin->increments == VoxelUpdate::kNoIncrements) {
+      if (cleared) discountClearedLeaf(node, edit);
+      return 0;
+    }
     float values[kMaxClasses];
     leafValues(node, values);
     rule_->add(values, batch.rows + size_t(begin->increments) * num_classes_, num_classes_);
     storeLeafValues(node, values, edit);
+    if (cleared) discountClearedLeaf(node, edit);  // this scan's kernel evidence too
     return 1;
   }
   if (!is_new && !nodeHasChildren(node)) {
