@@ -54,7 +54,8 @@ cv::Mat renderLegend(const ClassTable& classes, const UncertaintyRange& range,
   for (int c = 0; c < C; ++c)
     swatch(&image, c, C, rgb(classes.colors[c]), std::to_string(c) + " " + classes.names[c]);
   swatch(&image, C, C, cv::Scalar(128, 128, 128), "no evidence");
-  colourBar(&image, L::barLeft(0), L::barTop(C), uncertainty_name, range.min, range.max);
+  colourBar(&image, L::barLeft(0), L::barTop(C),
+            uncertainty_name + (range.automatic ? " (5-95 %)" : ""), range.min, range.max);
   colourBar(&image, L::barLeft(1), L::barTop(C), "conflict", 0.0, 1.0);
   return image;
 }
