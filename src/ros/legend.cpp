@@ -34,7 +34,9 @@ void colourBar(cv::Mat* image, int left, int top, const std::string& title, doub
   std::snprintf(label, sizeof(label), "%.2g", 0.5 * (lo + hi));
   text(image, label, left + L::kBarWidth / 2 - 10, below, 0.4);
   std::snprintf(label, sizeof(label), "%.2g", hi);
-  text(image, label, left + L::kBarWidth - 22, below, 0.4);
+  int unused_baseline = 0;  // right-aligned under the bar's end, whatever its length
+  const int width = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &unused_baseline).width;
+  text(image, label, left + L::kBarWidth - width, below, 0.4);
 }
 
 void swatch(cv::Mat* image, int i, int num_classes, const cv::Scalar& colour,
