@@ -7,8 +7,8 @@
 #   bash scripts/regen_docs.sh readme     only the README's pictures and table (no ROS needed)
 #   bash scripts/regen_docs.sh rviz       only the rviz pictures (needs the catkin workspace)
 #   bash scripts/regen_docs.sh all        also docs/data.md (scripts/generate_data_docs.sh), the
-#                                         calibration tables (scripts/calibration/cross_dataset.sh)
-#                                         and docs/benchmarks.md (scripts/bench.sh): an hour or more
+#                                         results and calibration tables (scripts/results.sh) and
+#                                         docs/benchmarks.md (scripts/bench.sh): hours on 2 cores
 #
 # The rviz pictures need a built catkin workspace (bash scripts/test.sh builds build/.catkin_ws),
 # xvfb and imagemagick. Look at the pictures before committing them.
@@ -63,9 +63,8 @@ rviz() {
 others() {
   note "docs/data.md: scripts/generate_data_docs.sh"
   bash scripts/generate_data_docs.sh
-  note "docs/calibration_tables.md: scripts/calibration/cross_dataset.sh"
-  bash scripts/calibration/cross_dataset.sh "${out}/cross_dataset"
-  /usr/bin/python3 scripts/calibration/summarize.py "${out}/cross_dataset" >docs/calibration_tables.md
+  note "docs/results*.md, docs/calibration_tables.md: scripts/results.sh"
+  bash scripts/results.sh "${out}/results"
   note "docs/benchmarks.md: scripts/bench.sh"
   bash scripts/bench.sh
 }
