@@ -160,13 +160,14 @@ if ((write_docs)); then
       cat "${sequences}/meta.txt"
       echo '```'
       echo
-      long=()
+      report=()
       for m in plain exact live; do
-        [[ -f "${sequences}/long_${m}.csv" ]] && long+=(--long "${m}=${sequences}/long_${m}.csv")
+        [[ -f "${sequences}/long_${m}.csv" ]] && report+=(--long "${m}=${sequences}/long_${m}.csv")
       done
+      [[ -f "${sequences}/occupied_only.csv" ]] && report+=(--fewer-rows "${sequences}/occupied_only.csv")
       /usr/bin/python3 "${root}/bench/sequence_report.py" --revisit "${sequences}/revisit.csv" \
         --long-label "Long sequence: SYNTHETIC generated forest trail (2 m a scan)" \
-        ${long[@]+"${long[@]}"} --png "${root}/docs/images/bench_cpu_per_scan.png" \
+        ${report[@]+"${report[@]}"} --png "${root}/docs/images/bench_cpu_per_scan.png" \
         --png-link images/bench_cpu_per_scan.png
       if [[ -f "${sequences}/live_rate/summary.json" ]]; then
         echo
