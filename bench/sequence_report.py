@@ -54,6 +54,9 @@ def phase_rows(data, phases):
             continue
         rows = data[key]
         for name, lo, hi in phases:
+            hi = min(hi, len(plain), len(rows))
+            if lo >= hi:
+                continue  # a run stopped before this phase
             cpu = total(rows, "cpu_ms", lo, hi) / total(plain, "cpu_ms", lo, hi)
             wall = total(rows, "wall_ms", lo, hi) / total(plain, "wall_ms", lo, hi)
             parts = "–" if key == "plain" else " / ".join(
