@@ -11,6 +11,7 @@
 #include "bootstrap_report.h"
 #include "commands.h"
 #include "dataset.h"
+#include "evidential_octomap/settings.h"
 #include "pipeline.h"
 #include "report.h"
 #include "synthetic.h"
@@ -89,38 +90,6 @@ SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
   return c;
 }
 
-// Sets one SemanticConfig field by name; false when the key or value is not usable.
-bool setParameter(const std::string& key, const std::string& value, SemanticConfig* c) {
-  if (key == "semantic_occupied_only" || key == "fast_free_space") {
-    if (value != "0" && value != "1") return false;
-    (key == "fast_free_space" ? c->fast_free_space : c->semantic_occupied_only) = value == "1";
-    return true;
-  }
-  if (key == "downsampling" || key == "kernel_distance") {
-    (key == "downsampling" ? c->downsampling : c->kernel_distance) = value;
-    return !value.empty();
-  }
-  const std::pair<const char*, double*> fields[] = {{"length_scale", &c->length_scale},
-                                                    {"sigma0", &c->sigma0},
-                                                    {"beta", &c->beta},
-                                                    {"gamma", &c->gamma},
-                                                    {"drop_percent", &c->drop_percent},
-                                                    {"evidence_cap", &c->evidence_cap},
-                                                    {"ds_multiplier", &c->ds_multiplier},
-                                                    {"evidence_floor", &c->evidence_floor}};
-  for (const auto& [name, field] : fields) {
-    if (key != name) continue;
-    try {
-      size_t used = 0;
-      *field = std::stod(value, &used);
-      return used == value.size();
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  return false;
-}
-
 // A variant is a named one, optionally followed by parameter overrides that make an ablation
 // row: "dempster:drop_percent=0:evidence_cap=2". Throws std::invalid_argument.
 SemanticConfig variantConfig(const std::string& variant, const SemanticConfig& base) {
@@ -133,11 +102,11 @@ SemanticConfig variantConfig(const std::string& variant, const SemanticConfig& b
     const size_t eq = parts[i].find('=');
     const std::string key = parts[i].substr(0, eq);
     const std::string value = eq == std::string::npos ? "" : parts[i].substr(eq + 1);
-    if (!setParameter(key, value, &c)) {
+    const Setting* setting = findSetting(key);
+    if (!setting || !setting->parse(value, &c)) {
       throw std::invalid_argument("variant '" + variant + "': cannot set '" + parts[i] +
-                                  "' (key=value of a numeric SemanticConfig field, "
-                                  "downsampling / kernel_distance, or fast_free_space / "
-                                  "semantic_occupied_only = 0 or 1)");
+                                  "' (key=value of a setting of docs/parameters.md; booleans "
+                                  "0/1 or false/true)");
     }
   }
   const std::string problem = c.problem();
@@ -146,7 +115,7 @@ SemanticConfig variantConfig(const std::string& variant, const SemanticConfig& b
 }
 
 // Plans. default (the demo; about 10 min on 2 cores): every variant with onehot evidence (the
-// peers' setup in BENCHMARKS.md); dempster and dempster-paper for knn-vote and confusion
+// peers' setup); dempster and dempster-paper for knn-vote and confusion
 // (what each source does to the paper's uncertainty mechanisms); held-out: dempster, sbki, ebs with
 // onehot. extended: also sbki and ebs with knn-vote and confusion. full: every variant x source x
 // protocol. Giving --sources/--variants/--protocols runs exactly their cross product.
