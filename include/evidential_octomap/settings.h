@@ -25,9 +25,9 @@ namespace evidential_octomap {
 // kInsert: how one insert runs (never stored; may differ from insert to insert).
 enum class SettingScope { kMap, kInsert };
 
-using SettingField = std::variant<bool SemanticConfig::*, int SemanticConfig::*,
-                                  float SemanticConfig::*, double SemanticConfig::*,
-                                  std::string SemanticConfig::*>;
+using SettingField =
+    std::variant<bool SemanticConfig::*, int SemanticConfig::*, float SemanticConfig::*,
+                 double SemanticConfig::*, std::string SemanticConfig::*>;
 
 // Valid values of a number: lo < / <= v < / <= hi (NaN never), or v == special when special is
 // not NaN. `text` says it in words, as the error messages do.
@@ -41,10 +41,10 @@ struct SettingRange {
 };
 
 struct Setting {
-  const char* name;  // the field, the Python keyword, the compare variant key, the ROS ~param
+  const char* name = nullptr;  // the field, Python keyword, compare variant key and ROS ~param
   SettingField field;
-  SettingScope scope;
-  const char* help;
+  SettingScope scope = SettingScope::kMap;
+  const char* help = nullptr;
   SettingRange range;                // numbers
   std::vector<std::string> choices;  // strings: the values allowed
   const char* ros = nullptr;         // the ~param when it is not `name`

@@ -14,88 +14,121 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr SettingScope kMap = SettingScope::kMap, kInsert = SettingScope::kInsert;
 
-// Ranges the settings share.
 constexpr SettingRange kPositive{0.0, kInf, true, true, kNaN, "finite and > 0"};
-constexpr SettingRange kFinite{};
-constexpr SettingRange kNone{-kInf, kInf, false, false, kNaN, "a number"};
 
-template <class T, class Base>
-SettingField field(T Base::*member) {
-  return static_cast<T SemanticConfig::*>(member);
-}
+// One entry of the list: name, field, scope and help, then what differs from the defaults.
+struct Entry {
+  Setting s{};
+  template <class T, class Base>
+  Entry(const char* name, T Base::*member, SettingScope scope, const char* help) {
+    s.name = name;
+    s.field = static_cast<T SemanticConfig::*>(member);
+    s.scope = scope;
+    s.help = help;
+  }
+  Entry&& range(const SettingRange& r) && {
+    s.range = r;
+    return std::move(*this);
+  }
+  Entry&& choices(std::vector<std::string> values) && {
+    s.choices = std::move(values);
+    return std::move(*this);
+  }
+  Entry&& ros(const char* name) && {
+    s.ros = name;
+    return std::move(*this);
+  }
+  Entry&& flag(const char* cli) && {  // a bool given as a CLI flag, in CLI11's spelling
+    s.cli = cli;
+    s.cli_flag = true;
+    return std::move(*this);
+  }
+  Entry&& reconfigurable(double ui_min = 0.0, double ui_max = 0.0) && {  // in Mapping.cfg
+    s.reconfigurable = true;
+    s.ui_min = ui_min;
+    s.ui_max = ui_max;
+    return std::move(*this);
+  }
+};
 
+// clang-format off
 std::vector<Setting> makeList() {
   const std::vector<std::string> rules(kFusionRuleNames.begin(), kFusionRuleNames.end());
-  // name, field, scope, help, range, choices, ros, cli, cli_flag, reconfigurable, ui_min, ui_max
-  return {
-      {"rule", field(&MapSettings::rule), kMap, "Fusion rule: dempster (the paper), sbki or ebs",
-       kFinite, rules},
-      {"length_scale", field(&MapSettings::length_scale), kMap, "Kernel length scale l [m]",
-       kPositive, {}, nullptr, nullptr, false, true, 0.01, 5.0},
-      {"sigma0", field(&MapSettings::sigma0), kMap, "Kernel amplitude", kPositive, {}, nullptr,
-       nullptr, false, true, 0.0, 1.0},
-      {"beta", field(&MapSettings::beta), kMap, "Adaptive length factor beta", kPositive, {},
-       nullptr, nullptr, false, true, 0.01, 10.0},
-      {"gamma", field(&MapSettings::gamma), kMap,
-       "Adaptive length decay gamma (how fast the support shrinks with the uncertainty)", kFinite,
-       {}, nullptr, nullptr, false, true, 0.0, 20.0},
-      {"drop_percent", field(&MapSettings::drop_percent), kMap,
-       "Percentage psi of the most uncertain points dropped per scan (with the threshold on)",
-       {0.0, 100.0, false, true, kNaN, "in [0, 100)"}, {}, nullptr, nullptr, false, true, 0.0,
-       100.0},
-      {"adaptive_length", field(&MapSettings::adaptive_length), kMap,
-       "The paper's adaptive support l*beta*e^(1-gamma u) (off: gamma = 0, support l*beta*e; "
-       "Table II ablation)",
-       kFinite, {}, nullptr, "--adaptive-length,!--no-adaptive-length", true, true},
-      {"uncertainty_threshold", field(&MapSettings::uncertainty_threshold), kMap,
-       "The paper's percentile threshold: drop the drop_percent most uncertain points of each "
-       "scan (Table II ablation)",
-       kFinite, {}, nullptr, "--threshold,!--no-threshold", true, true},
-      {"reference_compat", field(&MapSettings::reference_compat), kMap,
-       "The authors' released configuration: gamma = 0 (support l*beta*e), count-cap "
-       "down-sampling and the percentile threshold",
-       kFinite, {}, nullptr, "--reference-compat", true, true},
-      {"sbki_prior", field(&MapSettings::sbki_prior), kMap, "S-BKI prior alpha0", kPositive},
-      {"evidence_cap", field(&MapSettings::evidence_cap), kMap,
-       "dempster: read opinions with the fused log-evidence capped here: -1 follows the "
-       "evidence (docs/calibration.md), 0 no cap, > 0 a fixed cap (e.g. from 'calibrate')",
-       {0.0, kInf, false, true, MapSettings::kAdaptiveCap,
-        "-1 (adaptive) or finite and >= 0 (0: no cap)"}},
-      {"downsampling", field(&MapSettings::downsampling), kMap,
-       "Semantic input down-sampling: average (grid of resolution/ds_multiplier) or count_cap "
-       "(the authors': at most ds_multiplier+1 points per 2x2x2-voxel block)",
-       kFinite, {"average", "count_cap"}},
-      {"ds_multiplier", field(&MapSettings::ds_multiplier), kMap,
-       "Down-sampling parameter (see downsampling; <= 0: off)",
-       {-kInf, SemanticConfig::kMaxDsMultiplier, false, false, kNaN, "<= 1000 (<= 0: off)"}, {},
-       nullptr, nullptr, false, true, 0.0, 50.0},
-      {"kernel_distance", field(&MapSettings::kernel_distance), kMap,
-       "Point-to-voxel distance of the kernel: voxel (to the voxel's cube, so a point always "
-       "reaches its own voxel) or centre",
-       kFinite, {"voxel", "centre"}},
-      {"max_range", field(&MapSettings::max_range), kMap, "Max sensor range [m] (< 0: unlimited)",
-       {-kInf, kInf, false, false, kNaN, "a number (< 0: unlimited)"}, {}, "sensor_model/max_range",
-       nullptr, false, true, -1.0, 500.0},
-      {"kernel_creates_leaves", field(&MapSettings::kernel_creates_leaves), kMap,
-       "Kernel updates may create leaves in unknown space", kFinite, {}, nullptr, nullptr, false,
-       true},
-      {"discretize", field(&MapSettings::discretize), kMap,
-       "Occupancy through OctoMap's discretized ray casting (one ray per hit voxel)"},
-      {"fast_free_space", field(&InsertSettings::fast_free_space), kInsert,
-       "Fast free space for live use: rays stop in space this scan already cleared (not exact)"},
-      {"semantic_occupied_only", field(&InsertSettings::semantic_occupied_only), kInsert,
-       "Semantic evidence only for occupied voxels and this scan's end voxels, for live use: "
-       "about 4x less kernel work (not exact)"},
-      {"evidence_floor", field(&InsertSettings::evidence_floor), kInsert,
-       "Point evidence below this counts as 0 (0: off; 0.01 makes learned evidence about as "
-       "cheap as one-hot)",
-       {0.0, kInf, false, true, kNaN, "finite and >= 0 (0: off)"}},
-      {"threads", field(&InsertSettings::threads), kInsert,
-       "Threads of the semantic pass (0: OpenMP default)",
-       {0.0, double(SemanticConfig::kMaxThreads), false, false, kNaN,
-        "in [0, 1024] (0: OpenMP default)"}},
+  const Entry list[] = {
+    // --- what a map means (stored in the .ot header) ---
+    Entry("rule", &MapSettings::rule, kMap, "Fusion rule: dempster (the paper), sbki or ebs")
+        .choices(rules),
+    Entry("length_scale", &MapSettings::length_scale, kMap, "Kernel length scale l [m]")
+        .range(kPositive).reconfigurable(0.01, 5.0),
+    Entry("sigma0", &MapSettings::sigma0, kMap, "Kernel amplitude")
+        .range(kPositive).reconfigurable(0.0, 1.0),
+    Entry("beta", &MapSettings::beta, kMap, "Adaptive length factor beta")
+        .range(kPositive).reconfigurable(0.01, 10.0),
+    Entry("gamma", &MapSettings::gamma, kMap,
+          "Adaptive length decay gamma (how fast the support shrinks with the uncertainty)")
+        .reconfigurable(0.0, 20.0),
+    Entry("drop_percent", &MapSettings::drop_percent, kMap,
+          "Percentage psi of the most uncertain points dropped per scan (with the threshold on)")
+        .range({0.0, 100.0, false, true, kNaN, "in [0, 100)"}).reconfigurable(0.0, 100.0),
+    Entry("adaptive_length", &MapSettings::adaptive_length, kMap,
+          "The paper's adaptive support l*beta*e^(1-gamma u) (off: gamma = 0, support l*beta*e; "
+          "Table II ablation)")
+        .flag("--adaptive-length,!--no-adaptive-length").reconfigurable(),
+    Entry("uncertainty_threshold", &MapSettings::uncertainty_threshold, kMap,
+          "The paper's percentile threshold: drop the drop_percent most uncertain points of each "
+          "scan (Table II ablation)")
+        .flag("--threshold,!--no-threshold").reconfigurable(),
+    Entry("reference_compat", &MapSettings::reference_compat, kMap,
+          "The authors' released configuration: gamma = 0 (support l*beta*e), count-cap "
+          "down-sampling and the percentile threshold")
+        .flag("--reference-compat").reconfigurable(),
+    Entry("sbki_prior", &MapSettings::sbki_prior, kMap, "S-BKI prior alpha0").range(kPositive),
+    Entry("evidence_cap", &MapSettings::evidence_cap, kMap,
+          "dempster: read opinions with the fused log-evidence capped here: -1 follows the "
+          "evidence (docs/calibration.md), 0 no cap, > 0 a fixed cap (e.g. from 'calibrate')")
+        .range({0.0, kInf, false, true, MapSettings::kAdaptiveCap,
+                "-1 (adaptive) or finite and >= 0 (0: no cap)"}),
+    Entry("downsampling", &MapSettings::downsampling, kMap,
+          "Semantic input down-sampling: average (grid of resolution/ds_multiplier) or count_cap "
+          "(the authors': at most ds_multiplier+1 points per 2x2x2-voxel block)")
+        .choices({"average", "count_cap"}),
+    Entry("ds_multiplier", &MapSettings::ds_multiplier, kMap,
+          "Down-sampling parameter (see downsampling; <= 0: off)")
+        .range({-kInf, SemanticConfig::kMaxDsMultiplier, false, false, kNaN,
+                "<= 1000 (<= 0: off)"})
+        .reconfigurable(0.0, 50.0),
+    Entry("kernel_distance", &MapSettings::kernel_distance, kMap,
+          "Point-to-voxel distance of the kernel: voxel (to the voxel's cube, so a point always "
+          "reaches its own voxel) or centre")
+        .choices({"voxel", "centre"}),
+    Entry("max_range", &MapSettings::max_range, kMap, "Max sensor range [m] (< 0: unlimited)")
+        .range({-kInf, kInf, false, false, kNaN, "a number (< 0: unlimited)"})
+        .ros("sensor_model/max_range").reconfigurable(-1.0, 500.0),
+    Entry("kernel_creates_leaves", &MapSettings::kernel_creates_leaves, kMap,
+          "Kernel updates may create leaves in unknown space")
+        .reconfigurable(),
+    Entry("discretize", &MapSettings::discretize, kMap,
+          "Occupancy through OctoMap's discretized ray casting (one ray per hit voxel)"),
+    // --- how an insert runs (never stored) ---
+    Entry("fast_free_space", &InsertSettings::fast_free_space, kInsert,
+          "Fast free space for live use: rays stop in space this scan already cleared (not exact)"),
+    Entry("semantic_occupied_only", &InsertSettings::semantic_occupied_only, kInsert,
+          "Semantic evidence only for occupied voxels and this scan's end voxels, for live use "
+          "(not exact)"),
+    Entry("evidence_floor", &InsertSettings::evidence_floor, kInsert,
+          "Point evidence below this counts as 0 (0: off; 0.01 makes learned evidence about as "
+          "cheap as one-hot)")
+        .range({0.0, kInf, false, true, kNaN, "finite and >= 0 (0: off)"}),
+    Entry("threads", &InsertSettings::threads, kInsert,
+          "Threads of the semantic pass (0: OpenMP default)")
+        .range({0.0, double(SemanticConfig::kMaxThreads), false, false, kNaN,
+                "in [0, 1024] (0: OpenMP default)"}),
   };
+  std::vector<Setting> out;
+  for (const Entry& e : list) out.push_back(e.s);
+  return out;
 }
+// clang-format on
 
 std::string joinChoices(const std::vector<std::string>& choices, const char* last) {
   std::string out;
@@ -192,7 +225,8 @@ std::string settingsProblem(const SemanticConfig& c) {
     if (!s.choices.empty()) {
       const std::string& v = c.*std::get<std::string SemanticConfig::*>(s.field);
       if (std::find(s.choices.begin(), s.choices.end(), v) == s.choices.end())
-        return std::string(s.name) + " '" + v + "' is unknown; use " + joinChoices(s.choices, " or ");
+        return std::string(s.name) + " '" + v + "' is unknown; use " +
+               joinChoices(s.choices, " or ");
       continue;
     }
     const std::string problem = std::visit(
