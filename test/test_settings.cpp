@@ -60,14 +60,16 @@ TEST(SettingList, EveryMapSettingIsStoredInTheOtFileAndNoInsertSettingIs) {
     const SemanticConfig changed = withOtherValue(s);
     ASSERT_NE(s.valueText(changed), s.valueText(defaults)) << s.name;
     EvidentialOcTree tree(0.2, 3, changed);
-    tree.updateNode(octomap::point3d(0.1f, 0.1f, 0.1f), true);  // OctoMap skips an empty tree's data
+    tree.updateNode(octomap::point3d(0.1f, 0.1f, 0.1f),
+                    true);  // OctoMap skips an empty tree's data
     const auto loaded = writtenAndRead(tree);
     ASSERT_TRUE(loaded) << s.name;
     const std::string expected =
         s.scope == SettingScope::kMap ? s.valueText(changed) : s.valueText(defaults);
     EXPECT_EQ(s.valueText(loaded->config()), expected)
-        << s.name << (s.scope == SettingScope::kMap ? ": a map setting the .ot file loses"
-                                                    : ": an insert setting the .ot file keeps");
+        << s.name
+        << (s.scope == SettingScope::kMap ? ": a map setting the .ot file loses"
+                                          : ": an insert setting the .ot file keeps");
   }
 }
 
