@@ -17,8 +17,6 @@
 namespace evbench {
 namespace {
 
-using Mat4 = std::array<double, 16>;  // row-major
-
 Mat4 identity() { return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; }
 
 Mat4 fromRow12(const std::vector<double>& v) {
@@ -80,11 +78,10 @@ std::string scanName(int i) {
 
 }  // namespace
 
-std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& class_yaml,
-                                 int count, int* num_classes) {
-  const auto classes = evidential_octomap::ClassTable::load(class_yaml);
-  *num_classes = classes.numClasses();
-
+KittiSequence::KittiSequence(const std::string& folder, const std::string& class_yaml)
+    : folder_(folder),
+      classes_(std::make_shared<const evidential_octomap::ClassTable>(
+          evidential_octomap::ClassTable::load(class_yaml))) {
   Mat4 tr;
   bool have_tr = false;
   {
@@ -102,42 +99,70 @@ std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& c
   }
   if (!have_tr) throw std::runtime_error(folder + "/calib.txt has no Tr line");
   const Mat4 tr_inv = inverseRigid(tr);
-
   std::ifstream poses(folder + "/poses.txt");
   if (!poses) throw std::runtime_error("cannot open " + folder + "/poses.txt");
-  std::vector<Scan> scans;
   std::string line;
-  for (int i = 0; i < count; ++i) {
-    if (!std::getline(poses, line))
-      throw std::runtime_error("poses.txt has fewer lines than scans");
+  while (std::getline(poses, line)) {
     const auto v = parseNumbers(line);
-    if (v.size() != 12) throw std::runtime_error("poses.txt line " + std::to_string(i + 1));
-    const Mat4 t = multiply(tr_inv, multiply(fromRow12(v), tr));  // T_world_velo
-
-    const auto xyzi = readBinary<float>(folder + "/velodyne/" + scanName(i) + ".bin");
-    const auto labels = readBinary<uint32_t>(folder + "/predictions/" + scanName(i) + ".label");
-    if (xyzi.size() % 4 != 0 || labels.size() != xyzi.size() / 4) {
-      throw std::runtime_error("scan " + scanName(i) + ": point and label counts differ");
-    }
-    Scan scan;
-    const size_t n = labels.size();
-    scan.points_W.reserve(n);
-    scan.classes.resize(n);
-    scan.xyz_S.resize(3 * n);
-    scan.remission.resize(n);
-    for (size_t j = 0; j < n; ++j) {
-      const double x = xyzi[4 * j], y = xyzi[4 * j + 1], z = xyzi[4 * j + 2];
-      std::copy(&xyzi[4 * j], &xyzi[4 * j + 3], &scan.xyz_S[3 * j]);
-      scan.remission[j] = xyzi[4 * j + 3];
-      scan.points_W.push_back(float(t[0] * x + t[1] * y + t[2] * z + t[3]),
-                              float(t[4] * x + t[5] * y + t[6] * z + t[7]),
-                              float(t[8] * x + t[9] * y + t[10] * z + t[11]));
-      scan.classes[j] = classes.classOfRaw(labels[j]);
-    }
-    scan.origin_W = octomap::point3d(float(t[3]), float(t[7]), float(t[11]));
-    scans.push_back(std::move(scan));
+    if (v.empty()) continue;
+    if (v.size() != 12)
+      throw std::runtime_error("poses.txt line " + std::to_string(poses_.size() + 1));
+    poses_.push_back(multiply(tr_inv, multiply(fromRow12(v), tr)));  // T_world_velo
   }
+}
+
+int KittiSequence::numClasses() const { return classes_->numClasses(); }
+
+Scan KittiSequence::load(int i) const {
+  if (i < 0 || size_t(i) >= poses_.size())
+    throw std::runtime_error("poses.txt has no line for scan " + std::to_string(i));
+  const Mat4& t = poses_[size_t(i)];
+  const auto xyzi = readBinary<float>(folder_ + "/velodyne/" + scanName(i) + ".bin");
+  const auto labels = readBinary<uint32_t>(folder_ + "/predictions/" + scanName(i) + ".label");
+  if (xyzi.size() % 4 != 0 || labels.size() != xyzi.size() / 4) {
+    throw std::runtime_error("scan " + scanName(i) + ": point and label counts differ");
+  }
+  Scan scan;
+  const size_t n = labels.size();
+  scan.points_W.reserve(n);
+  scan.classes.resize(n);
+  scan.xyz_S.resize(3 * n);
+  scan.remission.resize(n);
+  for (size_t j = 0; j < n; ++j) {
+    const double x = xyzi[4 * j], y = xyzi[4 * j + 1], z = xyzi[4 * j + 2];
+    std::copy(&xyzi[4 * j], &xyzi[4 * j + 3], &scan.xyz_S[3 * j]);
+    scan.remission[j] = xyzi[4 * j + 3];
+    scan.points_W.push_back(float(t[0] * x + t[1] * y + t[2] * z + t[3]),
+                            float(t[4] * x + t[5] * y + t[6] * z + t[7]),
+                            float(t[8] * x + t[9] * y + t[10] * z + t[11]));
+    scan.classes[j] = classes_->classOfRaw(labels[j]);
+  }
+  scan.origin_W = octomap::point3d(float(t[3]), float(t[7]), float(t[11]));
+  return scan;
+}
+
+std::vector<Scan> loadKittiScans(const std::string& folder, const std::string& class_yaml,
+                                 int count, int* num_classes) {
+  const KittiSequence sequence(folder, class_yaml);
+  *num_classes = sequence.numClasses();
+  if (size_t(count) > sequence.size())
+    throw std::runtime_error("poses.txt has fewer lines than scans");
+  std::vector<Scan> scans;
+  for (int i = 0; i < count; ++i) scans.push_back(sequence.load(i));
   return scans;
+}
+
+std::vector<int> revisitOrder(int unique, int steps) {
+  // 0..n-1, n-2..0, 1..n-1, n-2..0, ...: forth and back, never the same scan twice in a row.
+  std::vector<int> order;
+  int i = 0, direction = 1;
+  while (int(order.size()) < steps) {
+    order.push_back(i);
+    if (unique < 2) continue;
+    if (i + direction < 0 || i + direction >= unique) direction = -direction;
+    i += direction;
+  }
+  return order;
 }
 
 std::vector<float> derivedEvidence(const std::vector<int>& classes, int num_classes,

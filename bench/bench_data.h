@@ -4,10 +4,16 @@
 
 #include <octomap/Pointcloud.h>
 
+#include <array>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
+
+namespace evidential_octomap {
+struct ClassTable;
+}
 
 namespace evbench {
 
@@ -25,6 +31,28 @@ struct Scan {
   std::vector<float> xyz_S;      // N x 3, sensor frame (the learned model's features)
   std::vector<float> remission;  // N
 };
+
+using Mat4 = std::array<double, 16>;  // row-major
+
+// A SemanticKITTI-style folder (velodyne/, predictions/, poses.txt, calib.txt): scans loaded one
+// at a time, so a long sequence never has to fit in memory. Throws std::runtime_error naming the
+// file on any problem.
+class KittiSequence {
+ public:
+  KittiSequence(const std::string& folder, const std::string& class_yaml);
+  size_t size() const { return poses_.size(); }
+  int numClasses() const;
+  Scan load(int i) const;
+
+ private:
+  std::string folder_;
+  std::shared_ptr<const evidential_octomap::ClassTable> classes_;
+  std::vector<Mat4> poses_;  // T_world_velo
+};
+
+// The scan indices of a revisit: 0..unique-1, then back and forth at the real poses
+// (0..9, 8..0, 1..9, ... for 10 scans), `steps` of them.
+std::vector<int> revisitOrder(int unique, int steps);
 
 // Loads scans 0..count-1 of a SemanticKITTI-style folder (velodyne/, predictions/, poses.txt,
 // calib.txt). Throws std::runtime_error naming the file on any problem.

@@ -33,15 +33,23 @@
 #include <vector>
 
 #include "bench_data.h"
+#include "bench_methods.h"
 #include "json_writer.h"
 #include "occupancy_diff.h"
 #include "plain_octomap.h"
 
 using evbench::Clock;
 using evbench::Json;
+using evbench::liveMethod;
 using evbench::median;
+using evbench::Method;
 using evbench::msSince;
+using evbench::Phase;
+using evbench::PlainMethod;
+using evbench::plainMethod;
 using evbench::Scan;
+using evbench::SemanticMethod;
+using evbench::semanticMethod;
 using evidential_octomap::EvidentialOcTree;
 using evidential_octomap::EvidentialOcTreeNode;
 using evidential_octomap::InsertStats;
@@ -52,22 +60,18 @@ namespace {
 struct Options {
   std::string data = "data/semantickitti_08_first10";
   std::string classes = "config/classes_semantickitti.yaml";
-  int scans = 10;
+  int scans = 10;  // distinct scans loaded
+  int steps = 0;   // inserts: 0 = scans (one pass); more = the revisit order (revisitOrder)
   double resolution = 0.2;
   int repeats = 1;
-  bool quick = false;  // fewer scans and methods: under 3 minutes
+  std::vector<double> ranges = {-1.0, 50.0};  // max ranges, each its own interleaved run
+  bool quick = false;                         // fewer scans and methods: under 3 minutes
   std::string json_path;
   std::string md_path;
   std::string learned_model;  // default: next to the class table (defaultLearnedModel)
   std::string rss_child;      // internal: "plain", "exact" or "fast"
   double rss_range = -1.0;
 };
-
-double threadCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
 
 std::string fmt(double v, int decimals = 1) {
   char buffer[64];
@@ -78,129 +82,10 @@ std::string fmt(double v, int decimals = 1) {
 std::string rangeName(double r) { return r < 0 ? "-1 (unlimited)" : fmt(r, 0) + " m"; }
 std::string rangeTag(double r) { return r < 0 ? "r-1" : "r" + fmt(r, 0); }
 
-// ---------------------------------------------------------------------------------------------
-// One method: its map and its measurements, per scan index (all repeats).
-struct Method {
-  std::string label;  // table row
-  std::string key;    // JSON / summary key: plain, plain_discretize, exact, exact_1t, fast, ...
-  double max_range = -1.0;
-  int threads = 1;
-  bool learned = false;  // learned (cross-fitted) evidence, else derived one-hot
-  std::vector<std::vector<double>> wall, cpu, main_cpu;  // ms [scan][repeat]
-  std::vector<std::vector<InsertStats>> stats;           // semantic only
-
-  virtual ~Method() = default;
-  virtual void reset(double resolution, int num_classes) = 0;
-  virtual InsertStats insert(const Scan& scan, const std::vector<float>& evidence) = 0;
-
-  void step(size_t i, const Scan& scan, const std::vector<float>& evidence) {
-    if (wall.size() <= i)
-      wall.resize(i + 1), cpu.resize(i + 1), main_cpu.resize(i + 1), stats.resize(i + 1);
-    const double cpu0 = evbench::processCpuMs(), main0 = threadCpuMs();
-    const auto start = Clock::now();
-    const InsertStats s = insert(scan, evidence);
-    wall[i].push_back(msSince(start));
-    cpu[i].push_back(evbench::processCpuMs() - cpu0);
-    main_cpu[i].push_back(threadCpuMs() - main0);
-    stats[i].push_back(s);
-  }
-  static double sum(const std::vector<std::vector<double>>& v) {
-    double s = 0.0;
-    for (const auto& r : v) s += std::accumulate(r.begin(), r.end(), 0.0);
-    return s;
-  }
-  static double medianOf(const std::vector<std::vector<double>>& v) {
-    std::vector<double> all;
-    for (const auto& r : v) all.insert(all.end(), r.begin(), r.end());
-    return median(all);
-  }
-  // Median over every step of one InsertStats field.
-  double medianStat(double InsertStats::*field) const {
-    std::vector<double> all;
-    for (const auto& r : stats)
-      for (const auto& s : r) all.push_back(s.*field);
-    return median(all);
-  }
-  double sumStat(double InsertStats::*field) const {
-    double total = 0.0;
-    for (const auto& r : stats)
-      for (const auto& s : r) total += s.*field;
-    return total;
-  }
-  // Share of the CPU work that ran in parallel: the worker threads' CPU (process minus calling
-  // thread) is the parallel work's share beyond the caller's own part of it.
-  double parallelShare() const {
-    const double total = sum(cpu), workers = total - sum(main_cpu);
-    return threads < 2 || total <= 0.0 ? 0.0
-                                       : std::min(1.0, workers * threads / (threads - 1) / total);
-  }
-};
-
-struct PlainMethod : Method {
-  bool discretize = false;
-  std::unique_ptr<octomap::OcTree> tree;
-  void reset(double resolution, int) override {
-    tree = std::make_unique<octomap::OcTree>(resolution);
-  }
-  InsertStats insert(const Scan& scan, const std::vector<float>&) override {
-    evbench::plainInsert(*tree, scan.points_W, scan.origin_W, max_range, discretize);
-    return {};
-  }
-};
-
-struct SemanticMethod : Method {
-  SemanticConfig config;
-  std::unique_ptr<EvidentialOcTree> tree;
-  void reset(double resolution, int num_classes) override {
-    config.max_range = max_range;
-    config.threads = threads;
-    tree = std::make_unique<EvidentialOcTree>(resolution, num_classes, config);
-  }
-  InsertStats insert(const Scan& scan, const std::vector<float>& evidence) override {
-    return tree->insertSemanticScan(scan.points_W, evidence, scan.origin_W);
-  }
-};
-
-std::unique_ptr<Method> plainMethod(double range, bool discretize) {
-  auto m = std::make_unique<PlainMethod>();
-  m->label =
-      discretize ? "plain OcTree::insertPointCloud, discretize" : "plain OcTree::insertPointCloud";
-  m->key = discretize ? "plain_discretize" : "plain";
-  m->max_range = range;
-  m->discretize = discretize;
-  return m;
-}
-
-std::unique_ptr<Method> semanticMethod(double range, int threads, bool fast,
-                                       const std::string& rule, bool learned = false) {
-  auto m = std::make_unique<SemanticMethod>();
-  m->label = std::string(fast ? "semantic insert, fast free space" : "semantic insert, exact") +
-             (rule == "dempster" ? "" : " (" + rule + ")") +
-             (learned ? ", learned (cross-fitted) evidence" : "");
-  m->key = std::string(fast ? "fast" : "exact") + (rule == "dempster" ? "" : "_" + rule) +
-           (learned ? "_learned" : "") + (threads == 1 ? "_1t" : "");
-  m->max_range = range;
-  m->threads = threads;
-  m->learned = learned;
-  m->config.rule = rule;
-  m->config.fast_free_space = fast;
-  return m;
-}
-
-// The live launch's settings (launch/mapping.launch): fast free space, kernel length 0.2 m,
-// count cap ds_multiplier 2, evidence floor 0.01.
-std::unique_ptr<Method> liveMethod(double range, bool learned) {
-  auto m = semanticMethod(range, 2, true, "dempster", learned);
-  m->label =
-      std::string("live launch settings (fast free space, length_scale 0.2, ds_multiplier 2, "
-                  "evidence_floor 0.01)") +
-      (learned ? ", learned (cross-fitted) evidence" : "");
-  m->key = std::string("live") + (learned ? "_learned" : "");
-  SemanticConfig& config = static_cast<SemanticMethod&>(*m).config;
-  config.length_scale = 0.2;
-  config.ds_multiplier = 2.0;
-  config.evidence_floor = 0.01;
-  return m;
+std::vector<Phase> phasesOf(size_t scans, size_t steps) {
+  std::vector<Phase> phases = {{"first pass", "first", 0, std::min(scans, steps)}};
+  if (steps > 10) phases.push_back({"steady state", "steady", 10, std::min<size_t>(30, steps)});
+  return phases;
 }
 
 // Exact occupancy with learned evidence below 0.01 counted as 0 (SemanticConfig::evidence_floor).
@@ -252,18 +137,19 @@ RangeRun buildRun(double range, bool quick) {
   return run;
 }
 
-void runInterleaved(RangeRun* run, const std::vector<Scan>& scans,
+void runInterleaved(RangeRun* run, const std::vector<Scan>& scans, const std::vector<int>& order,
                     const std::vector<std::vector<float>>& evidence,
                     const std::vector<std::vector<float>>& learned, double resolution,
                     int num_classes, int repeat) {
   for (auto& m : run->methods) m->reset(resolution, num_classes);
   const size_t count = run->methods.size();
-  for (size_t i = 0; i < scans.size(); ++i) {
-    std::cerr << "  range " << fmt(run->range, 0) << ", repeat " << repeat + 1 << ", scan " << i
-              << std::endl;
+  for (size_t i = 0; i < order.size(); ++i) {
+    const size_t scan = size_t(order[i]);
+    std::cerr << "  range " << fmt(run->range, 0) << ", repeat " << repeat + 1 << ", step " << i
+              << " (scan " << scan << ")" << std::endl;
     for (size_t k = 0; k < count; ++k) {
       Method& m = *run->methods[(k + i + repeat) % count];
-      m.step(i, scans[i], m.learned ? learned[i] : evidence[i]);
+      m.step(i, scans[scan], m.learned ? learned[scan] : evidence[scan]);
     }
   }
 }
@@ -372,6 +258,16 @@ int rssChild(const Options& o) {
   return 0;
 }
 
+// "-1,50" -> {-1, 50}.
+std::vector<double> parseRanges(const std::string& text) {
+  std::vector<double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) out.push_back(std::stod(item));
+  if (out.empty()) throw std::invalid_argument("--ranges needs a comma-separated list");
+  return out;
+}
+
 Options parse(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
@@ -386,6 +282,10 @@ Options parse(int argc, char** argv) {
       o.classes = next();
     else if (a == "--scans")
       o.scans = std::stoi(next());
+    else if (a == "--steps")
+      o.steps = std::stoi(next());
+    else if (a == "--ranges")
+      o.ranges = parseRanges(next());
     else if (a == "--resolution")
       o.resolution = std::stod(next());
     else if (a == "--repeats")
@@ -403,9 +303,13 @@ Options parse(int argc, char** argv) {
     else if (a == "--rss-range")
       o.rss_range = std::stod(next());
     else if (a == "--help" || a == "-h") {
-      std::cout << "evidential_bench [--data DIR] [--classes YAML] [--scans N] [--resolution R]\n"
-                   "  [--repeats N] [--quick] [--json PATH] [--md PATH]\n"
+      std::cout << "evidential_bench [--data DIR] [--classes YAML] [--scans N] [--steps N]\n"
+                   "  [--resolution R] [--repeats N] [--quick] [--ranges -1,50] [--json PATH] "
+                   "[--md PATH]\n"
                    "  [--learned-model PATH]\n"
+                   "--steps: inserts; more than --scans drives the scans forth and back at their "
+                   "poses (0..9, 8..0, 1..9, ...); rows then give the first pass and the steady "
+                   "state (steps 10-29)\n"
                    "--quick: 4 scans, exact, fast, learned and live at 2 threads against plain "
                    "(< 3 min)\n";
       std::exit(0);
@@ -414,6 +318,7 @@ Options parse(int argc, char** argv) {
     }
   }
   if (o.quick && o.scans > 4) o.scans = 4;
+  if (o.steps <= 0) o.steps = o.scans;
   return o;
 }
 
@@ -429,21 +334,26 @@ struct Report {
   }
 };
 
-void insertTable(const std::vector<RangeRun>& runs, Report* r) {
-  r->md << "### Insert time (methods interleaved scan by scan; ratios = sums over the scans)\n\n"
-           "| max range | method | threads | median wall ms/scan | median CPU ms/scan | CPU ratio "
-           "to plain | CPU ratio to plain discretize | wall ratio to plain | parallel share of "
-           "the CPU |\n|---|---|---|---|---|---|---|---|---|\n";
+void insertTable(const std::vector<RangeRun>& runs, const std::vector<Phase>& phases, Report* r) {
+  r->md << "### Insert time (methods interleaved scan by scan; ratios = sums over the steps of "
+           "the phase)\n\n"
+           "| max range | method | threads | phase | median wall ms/scan | median CPU ms/scan | "
+           "CPU ratio to plain | CPU ratio to plain discretize | wall ratio to plain | parallel "
+           "share of the CPU |\n|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& run : runs) {
     const Method& plain = run.get("plain");
     const Method& plain_d = run.get("plain_discretize");
     for (const auto& m : run.methods) {
-      r->md << "| " << rangeName(run.range) << " | " << m->label << " | " << m->threads << " | "
-            << fmt(Method::medianOf(m->wall)) << " | " << fmt(Method::medianOf(m->cpu)) << " | "
-            << fmt(Method::sum(m->cpu) / Method::sum(plain.cpu), 3) << " | "
-            << fmt(Method::sum(m->cpu) / Method::sum(plain_d.cpu), 3) << " | "
-            << fmt(Method::sum(m->wall) / Method::sum(plain.wall), 3) << " | "
-            << (m->threads > 1 ? fmt(100.0 * m->parallelShare(), 0) + " %" : "–") << " |\n";
+      for (const Phase& p : phases) {
+        const auto cpu = Method::slice(m->cpu, p), wall = Method::slice(m->wall, p);
+        r->md << "| " << rangeName(run.range) << " | " << m->label << " | " << m->threads << " | "
+              << p.name << " (steps " << p.begin << "–" << p.end - 1 << ") | "
+              << fmt(Method::medianOf(wall)) << " | " << fmt(Method::medianOf(cpu)) << " | "
+              << fmt(Method::sum(cpu) / Method::sum(Method::slice(plain.cpu, p)), 3) << " | "
+              << fmt(Method::sum(cpu) / Method::sum(Method::slice(plain_d.cpu, p)), 3) << " | "
+              << fmt(Method::sum(wall) / Method::sum(Method::slice(plain.wall, p)), 3) << " | "
+              << (m->threads > 1 ? fmt(100.0 * m->parallelShare(), 0) + " %" : "–") << " |\n";
+      }
     }
   }
   r->md << "\nPlain OctoMap is the distribution's single-threaded liboctomap; the semantic "
@@ -479,15 +389,15 @@ void phaseTable(const std::vector<RangeRun>& runs, Report* r) {
   }
 }
 
-void growthTable(const RangeRun& run, Report* r) {
-  r->md << "\n### Per scan as the map grows (range " << rangeName(run.range)
-        << ", CPU ms, first repeat)\n\n| scan |";
+void growthTable(const RangeRun& run, const std::vector<int>& order, Report* r) {
+  r->md << "\n### Per step as the map grows (range " << rangeName(run.range)
+        << ", CPU ms, first repeat)\n\n| step | scan |";
   for (const auto& m : run.methods) r->md << " " << m->key << " |";
-  r->md << "\n|---|";
+  r->md << "\n|---|---|";
   for (size_t i = 0; i < run.methods.size(); ++i) r->md << "---|";
   r->md << "\n";
   for (size_t i = 0; i < run.methods[0]->cpu.size(); ++i) {
-    r->md << "| " << i << " |";
+    r->md << "| " << i << " | " << order[i] << " |";
     for (const auto& m : run.methods) r->md << " " << fmt(m->cpu[i][0]) << " |";
     r->md << "\n";
   }
@@ -589,7 +499,7 @@ void memoryTable(const Options& o, const RangeRun& run, int C, Report* r) {
               fmt(plain.ot_bytes / 1048576.0, 2) + " MB = " + fmt(ot_ratio, 2) + "x (target <= 2)");
 }
 
-void summaryLines(const std::vector<RangeRun>& runs, Report* r) {
+void summaryLines(const std::vector<RangeRun>& runs, const std::vector<Phase>& phases, Report* r) {
   for (const auto& run : runs) {
     const std::string tag = rangeTag(run.range), name = rangeName(run.range);
     const Method& plain = run.get("plain");
@@ -601,6 +511,13 @@ void summaryLines(const std::vector<RangeRun>& runs, Report* r) {
       r->line("cpu_ratio_" + key + "_vs_plain_" + tag, ratio,
               key + " insert CPU / plain insertPointCloud CPU, range " + name + ": " +
                   fmt(ratio, 3) + "x" + (key.rfind("exact", 0) == 0 ? " (target <= 0.15)" : ""));
+      for (const Phase& p : phases) {
+        const double phase_ratio =
+            Method::sum(Method::slice(m.cpu, p)) / Method::sum(Method::slice(plain.cpu, p));
+        r->line("cpu_ratio_" + key + "_vs_plain_" + tag + "_" + p.tag, phase_ratio,
+                key + " insert CPU / plain, range " + name + ", " + p.name + ": " +
+                    fmt(phase_ratio, 3) + "x");
+      }
       r->line("cpu_ms_" + key + "_" + tag, Method::medianOf(m.cpu),
               key + " median CPU ms/scan, range " + name + ": " + fmt(Method::medianOf(m.cpu)) +
                   (run.range > 0 ? " (live target <= 200)" : ""));
@@ -623,6 +540,8 @@ int main(int argc, char** argv) try {
 
   int num_classes = 0;
   const auto scans = evbench::loadKittiScans(o.data, o.classes, o.scans, &num_classes);
+  const std::vector<int> order = evbench::revisitOrder(o.scans, o.steps);
+  const std::vector<Phase> phases = phasesOf(scans.size(), order.size());
   std::vector<std::vector<float>> evidence;
   for (const auto& s : scans) evidence.push_back(evbench::derivedEvidence(s.classes, num_classes));
   // Learned (cross-fitted) evidence, computed before any timing.
@@ -635,15 +554,15 @@ int main(int argc, char** argv) try {
 
   Report report;
   std::vector<RangeRun> runs;
-  for (double range : {-1.0, 50.0}) {
+  for (double range : o.ranges) {
     runs.push_back(buildRun(range, o.quick));
     for (int rep = 0; rep < o.repeats; ++rep)
-      runInterleaved(&runs.back(), scans, evidence, learned, o.resolution, num_classes, rep);
+      runInterleaved(&runs.back(), scans, order, evidence, learned, o.resolution, num_classes, rep);
   }
-  insertTable(runs, &report);
+  insertTable(runs, phases, &report);
   phaseTable(runs, &report);
-  for (const auto& run : runs) growthTable(run, &report);
-  summaryLines(runs, &report);
+  for (const auto& run : runs) growthTable(run, order, &report);
+  summaryLines(runs, phases, &report);
   diffTable(runs, &report);
   memoryTable(o, runs[0], num_classes, &report);
 
@@ -654,6 +573,7 @@ int main(int argc, char** argv) try {
   Json root = Json::object();
   Json setup = Json::object();
   setup.set("data", o.data).set("scans", int(scans.size())).set("num_classes", num_classes);
+  setup.set("steps", int(order.size()));
   setup.set("resolution", o.resolution).set("repeats", o.repeats).set("quick", o.quick);
   setup.set("evidence",
             "derived: one-hot of the predicted class, magnitude 20; *_learned methods: "
@@ -674,6 +594,9 @@ int main(int argc, char** argv) try {
       j.set("cpu_ms_occupancy", m->sumStat(&InsertStats::cpu_ms_occupancy));
       j.set("cpu_ms_kernel", m->sumStat(&InsertStats::cpu_ms_kernel));
       j.set("cpu_ms_update", m->sumStat(&InsertStats::cpu_ms_update));
+      Json per_step = Json::array();
+      for (const auto& c : m->cpu) per_step.push(c.empty() ? 0.0 : c[0]);
+      j.set("cpu_ms_per_step", per_step);
       methods.push(j);
     }
   }

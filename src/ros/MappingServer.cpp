@@ -20,6 +20,7 @@
 #include "map_services.h"
 #include "evidential_octomap/io.h"
 #include "node_status.h"
+#include "startup_report.h"
 
 namespace evidential_octomap {
 namespace {
@@ -90,6 +91,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
                     << config_.insert_queue_size << "\n"
                     << s.str());
   }
+  reportSettingsProfile(pnh_, semantic_config_);
 
   outputs_ = std::make_unique<MapOutputs>(nh_, pnh_, config_, classes_,
                                           [this](const OctomapMsgsInterface::MapVisitor& visit) {

@@ -1,0 +1,114 @@
+#!/usr/bin/python3
+"""The live node fed by the player at a fixed rate: does it keep up at steady state?
+
+    bench/live_rate.py --minutes 5 --rate 20 --out build/live_rate
+
+Starts its own roscore (a free port), `roslaunch evidential_octomap mapping.launch` (the live
+settings) and `play_semantickitti.py` looping the bundled scans (0..9, 0..9, ...: the area
+revisited) with `_rate:=RATE` (the player sleeps 50 ms between TF and cloud besides 1 / RATE, so
+RATE 20 publishes about 10 clouds a second: the rate received is measured, from ~status). Every
+5 s the node's ~status goes to samples.csv; summary.json gives, after the first minute (steady
+state), the clouds received and inserted per second, the drops, the queue length and the insert
+times. Needs the sourced catkin workspace; outside CI (a measurement, not a test).
+"""
+import argparse
+import csv
+import importlib.util
+import json
+import os
+import subprocess
+import time
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+_spec = importlib.util.spec_from_file_location(
+    "soak_node", os.path.join(REPO, "test/reliability/soak_node.py"))
+soak_node = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(soak_node)  # free_port()
+
+FIELDS = ["t_s", "clouds_received", "clouds_inserted", "clouds_dropped_queue",
+          "clouds_dropped_invalid", "clouds_dropped_tf", "queue_length", "last_insert_ms",
+          "mean_insert_ms", "map_leaves"]
+
+
+def steady_summary(rows, warmup_s, rate):
+    first = next(r for r in rows if r["t_s"] >= warmup_s)
+    last = rows[-1]
+    span = last["t_s"] - first["t_s"]
+    delta = {k: last[k] - first[k] for k in FIELDS[1:6]}
+    window = [r for r in rows if r["t_s"] >= warmup_s]
+    return {"player_rate_param": rate, "steady_from_s": first["t_s"], "steady_span_s": span,
+            "received_per_s": delta["clouds_received"] / span,
+            "inserted_per_s": delta["clouds_inserted"] / span,
+            "dropped_queue": delta["clouds_dropped_queue"],
+            "dropped_invalid": delta["clouds_dropped_invalid"],
+            "dropped_tf": delta["clouds_dropped_tf"],
+            "queue_length_max": max(r["queue_length"] for r in window),
+            "last_insert_ms_median": sorted(r["last_insert_ms"] for r in window)[len(window) // 2],
+            "last_insert_ms_max": max(r["last_insert_ms"] for r in window),
+            "mean_insert_ms_end": last["mean_insert_ms"],
+            "load_average_end": open("/proc/loadavg").read().split()[:3]}
+
+
+def run(args):
+    os.makedirs(args.out, exist_ok=True)
+    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % soak_node.free_port()
+    port = os.environ["ROS_MASTER_URI"].rsplit(":", 1)[1]
+    procs = [subprocess.Popen(["roscore", "-p", port], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)]
+    try:
+        time.sleep(3)
+        import rospy
+        from evidential_octomap.msg import MappingStatus
+        log = open(os.path.join(args.out, "ros.log"), "w")
+        procs.append(subprocess.Popen(["roslaunch", "evidential_octomap", "mapping.launch",
+                                       "cloud_in:=/velodyne_points"], stdout=log,
+                                      stderr=subprocess.STDOUT))
+        procs.append(subprocess.Popen(["rosrun", "evidential_octomap", "play_semantickitti.py",
+                                       "_rate:=%g" % args.rate, "_loop:=true",
+                                       "__name:=player", "velodyne_points:=/velodyne_points"],
+                                      stdout=log, stderr=subprocess.STDOUT))
+        rospy.init_node("live_rate", disable_signals=True)
+        status = {}
+        rospy.Subscriber("/evidential_mapping_node/status", MappingStatus,
+                         lambda m: status.__setitem__("msg", m), queue_size=10)
+        while "msg" not in status or status["msg"].clouds_received == 0:
+            time.sleep(0.1)
+        t0 = time.time()
+        load_start = open("/proc/loadavg").read().split()[:3]
+        rows = []
+        with open(os.path.join(args.out, "samples.csv"), "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=FIELDS)
+            writer.writeheader()
+            while time.time() < t0 + 60.0 * args.minutes:
+                time.sleep(5.0)
+                s = status["msg"]
+                row = {k: getattr(s, k) for k in FIELDS[1:]}
+                row["t_s"] = round(time.time() - t0, 1)
+                rows.append(row)
+                writer.writerow(row)
+                f.flush()
+        summary = steady_summary(rows, 60.0, args.rate)
+        summary["load_average_start"] = load_start
+        summary["minutes"] = args.minutes
+        with open(os.path.join(args.out, "summary.json"), "w") as f:
+            json.dump(summary, f, indent=2)
+        print(json.dumps(summary, indent=2))
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+            try:
+                p.wait(30)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+def main():
+    p = argparse.ArgumentParser()
+    p.add_argument("--minutes", type=float, default=5.0)
+    p.add_argument("--rate", type=float, default=20.0, help="the player's ~rate")
+    p.add_argument("--out", default="build/live_rate")
+    run(p.parse_args())
+
+
+if __name__ == "__main__":
+    main()

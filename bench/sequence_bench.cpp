@@ -1,0 +1,139 @@
+// evidential_sequence_bench: CPU and wall time of every insert over a long or revisiting
+// sequence, scan by scan, for plain OctoMap, the exact semantic insert (library defaults) and
+// the live launch's settings, interleaved in one process (the order rotated each step) so a
+// change of the shared machine's load hits them alike. Writes one CSV row per (step, method);
+// bench/sequence_report.py turns the rows into the tables and the per-scan plot.
+//
+//   evidential_sequence_bench --data DIR --classes YAML --order revisit --scans 10 --steps 60
+//   evidential_sequence_bench --data out/long --classes out/long/classes.yaml --order forward
+//   evidential_sequence_bench ... --only exact   # one method alone: its RSS after every step
+//
+// Evidence is derived: one-hot of the predicted class x 20. Timers only; nothing here is a test.
+#include <evidential_octomap/evidential_octree.h>
+#include <omp.h>
+
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bench_data.h"
+#include "bench_methods.h"
+
+namespace {
+
+struct Options {
+  std::string data, classes, csv = "sequence.csv", order = "revisit", only;
+  int scans = 0;   // revisit: distinct scans (0: 10); forward: the first N (0: every scan)
+  int steps = 60;  // revisit only
+  double range = 50.0, resolution = 0.2;
+};
+
+Options parse(int argc, char** argv) {
+  Options o;
+  // Every option takes a value: the table says where it goes.
+  const std::map<std::string, std::function<void(const std::string&)>> options = {
+      {"--data", [&](const std::string& v) { o.data = v; }},
+      {"--classes", [&](const std::string& v) { o.classes = v; }},
+      {"--csv", [&](const std::string& v) { o.csv = v; }},
+      {"--order", [&](const std::string& v) { o.order = v; }},
+      {"--only", [&](const std::string& v) { o.only = v; }},
+      {"--scans", [&](const std::string& v) { o.scans = std::stoi(v); }},
+      {"--steps", [&](const std::string& v) { o.steps = std::stoi(v); }},
+      {"--range", [&](const std::string& v) { o.range = std::stod(v); }},
+      {"--resolution", [&](const std::string& v) { o.resolution = std::stod(v); }}};
+  for (int i = 1; i < argc; i += 2) {
+    const auto option = options.find(argv[i]);
+    if (option == options.end())
+      throw std::invalid_argument(std::string("unknown argument ") + argv[i] +
+                                  " (see the top of sequence_bench.cpp)");
+    if (i + 1 >= argc) throw std::invalid_argument(std::string(argv[i]) + " needs a value");
+    option->second(argv[i + 1]);
+  }
+  if (o.data.empty() || o.classes.empty())
+    throw std::invalid_argument("--data and --classes needed");
+  if (o.order != "revisit" && o.order != "forward")
+    throw std::invalid_argument("--order is revisit or forward");
+  return o;
+}
+
+std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
+  std::vector<std::unique_ptr<evbench::Method>> all;
+  all.push_back(evbench::plainMethod(o.range, false));
+  all.push_back(evbench::semanticMethod(o.range, 2, false, "dempster"));
+  all.push_back(evbench::liveMethod(o.range, false));
+  if (o.only.empty()) return all;
+  for (auto& m : all)
+    if (m->key == o.only) {
+      std::vector<std::unique_ptr<evbench::Method>> one;
+      one.push_back(std::move(m));
+      return one;
+    }
+  throw std::invalid_argument("--only is plain, exact or live");
+}
+
+// Scans by index: the revisit keeps its few distinct scans, a forward run loads each once.
+class ScanSource {
+ public:
+  explicit ScanSource(const Options& o)
+      : sequence_(o.data, o.classes), revisit_(o.order == "revisit") {
+    if (revisit_) {
+      const int n = o.scans > 0 ? o.scans : 10;
+      for (int i = 0; i < n; ++i) cache_.push_back(sequence_.load(i));
+      order_ = evbench::revisitOrder(n, o.steps);
+    } else {
+      const int n =
+          o.scans > 0 ? std::min<int>(o.scans, int(sequence_.size())) : int(sequence_.size());
+      for (int i = 0; i < n; ++i) order_.push_back(i);
+    }
+  }
+  const std::vector<int>& order() const { return order_; }
+  int numClasses() const { return sequence_.numClasses(); }
+  evbench::Scan get(int i) const { return revisit_ ? cache_[size_t(i)] : sequence_.load(i); }
+
+ private:
+  evbench::KittiSequence sequence_;
+  bool revisit_;
+  std::vector<evbench::Scan> cache_;
+  std::vector<int> order_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Options o = parse(argc, argv);
+  omp_set_num_threads(2);
+  const ScanSource source(o);
+  auto methods = methodsOf(o);  // --only: the one method alone, for its RSS
+  const int C = source.numClasses();
+  for (auto& m : methods) m->reset(o.resolution, C);
+  std::ofstream csv(o.csv);
+  if (!csv) throw std::runtime_error("cannot write " + o.csv);
+  csv << "step,scan,method,cpu_ms,wall_ms,cpu_ms_rays,cpu_ms_kernel,cpu_ms_update,rss_mb,"
+         "peak_rss_mb\n";
+  const auto& order = source.order();
+  for (size_t i = 0; i < order.size(); ++i) {
+    const evbench::Scan scan = source.get(order[i]);
+    const std::vector<float> evidence = evbench::derivedEvidence(scan.classes, C);
+    for (size_t k = 0; k < methods.size(); ++k) {
+      evbench::Method& m = *methods[(k + i) % methods.size()];
+      m.step(i, scan, evidence);
+      const auto& s = m.stats[i].back();
+      csv << i << "," << order[i] << "," << m.key << "," << m.cpu[i].back() << ","
+          << m.wall[i].back() << "," << s.cpu_ms_occupancy << "," << s.cpu_ms_kernel << ","
+          << s.cpu_ms_update << "," << evbench::currentRssMb() << "," << evbench::peakRssMb()
+          << "\n";
+    }
+    csv.flush();
+    if (i % 10 == 0) std::cerr << "  step " << i << " / " << order.size() << std::endl;
+  }
+  return 0;
+} catch (const std::exception& e) {
+  std::cerr << "evidential_sequence_bench: " << e.what() << "\n";
+  return 1;
+}
