@@ -91,7 +91,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
                     << config_.insert_queue_size << "\n"
                     << s.str());
   }
-  reportSettingsProfile(pnh_, semantic_config_);
+  reportSettingsProfile(pnh_, tree_->config());
 
   outputs_ = std::make_unique<MapOutputs>(nh_, pnh_, config_, classes_,
                                           [this](const OctomapMsgsInterface::MapVisitor& visit) {
