@@ -36,6 +36,7 @@ from ._core import (
     evaluate_map,
     evaluate_input,
     evidence_is_derived,
+    read_calibration,
 )
 
 __all__ = [
@@ -60,6 +61,7 @@ __all__ = [
     "evaluate_input",
     "evidence_is_derived",
     "load",
+    "read_calibration",
 ]
 
 try:  # built when OpenCV was found (the CLI's top-down pictures)

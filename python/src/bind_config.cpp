@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "bindings.h"
+#include "calibration_file.h"
 #include "evidential_octomap/settings.h"
 #include "evidential_octomap/subjective_logic.h"
 
@@ -46,6 +47,10 @@ void bindConfig(nb::module_& m) {
         setting.field);
   }
   m.attr("EVIDENCE_MAGNITUDE") = kEvidenceMagnitude;
+  m.def("read_calibration", &tools::readCalibrationCap, nb::arg("path"),
+        "The dempster read-out cap of a file written by `evidential_octomap calibrate`: "
+        "SemanticConfig(evidence_cap=read_calibration(path)). Raises RuntimeError (naming the "
+        "file and line) for an unreadable or invalid file.");
 }
 
 }  // namespace evidential_octomap::python

@@ -262,6 +262,12 @@ void bindTree(nb::module_& m) {
       .def("set_config", &Tree::setConfig, nb::arg("config"),
            "Replaces the parameters; a rule change is refused while the map holds evidence.")
       .def_prop_ro("rule", [](const Tree& t) { return t.rule().name(); })
+      .def_prop_ro("effective_evidence_cap", &Tree::effectiveEvidenceCap,
+                   "The cap dempster opinions are read with now (the adaptive cap's value, or "
+                   "the fixed one).")
+      .def_prop_ro("mean_point_log_evidence", &Tree::meanPointLogEvidence,
+                   "Mean over the inserted points of sum_c log1p(e^c / C): the adaptive cap's "
+                   "statistic.")
       .def_prop_rw("prob_hit", &Tree::getProbHit, &Tree::setProbHit)
       .def_prop_rw("prob_miss", &Tree::getProbMiss, &Tree::setProbMiss)
       .def_prop_rw("clamping_thres_min", &Tree::getClampingThresMin, &Tree::setClampingThresMin)

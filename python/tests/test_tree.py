@@ -226,3 +226,32 @@ def test_unsavable_sensor_model_is_refused_by_the_next_insert_with_the_save_reas
     np.testing.assert_array_equal(after.occupancy, before.occupancy)
     np.testing.assert_array_equal(after.belief, before.belief)
     assert not path.exists()
+
+
+def test_read_calibration_reads_the_cap_calibrate_writes(tmp_path):
+    path = tmp_path / "calibration.yaml"
+    path.write_text("# fitted by evidential_octomap calibrate\nevidence_cap: 6.25\n")
+    cap = eo.read_calibration(str(path))
+    assert cap == 6.25
+    assert eo.SemanticConfig(evidence_cap=cap).evidence_cap == 6.25
+
+
+def test_read_calibration_refuses_a_bad_file_with_its_line(tmp_path):
+    path = tmp_path / "calibration.yaml"
+    path.write_text("evidence_cap: -1\n")
+    with pytest.raises(RuntimeError, match="calibration.yaml:1: evidence_cap must be"):
+        eo.read_calibration(str(path))
+    with pytest.raises(RuntimeError, match="cannot read"):
+        eo.read_calibration(str(tmp_path / "missing.yaml"))
+
+
+def test_the_adaptive_cap_follows_the_inserted_evidence():
+    tree = eo.EvidentialOcTree(0.2, 3)
+    assert tree.effective_evidence_cap == 3.0  # before any evidence
+    points = np.array([[2.0, 0.0, 0.0], [2.0, 0.4, 0.0], [2.0, -0.4, 0.0], [2.0, 0.8, 0.0]])
+    evidence = np.zeros((4, 3), np.float32)
+    evidence[:, 1] = 30.0
+    tree.insert_scan(points, evidence, origin=ORIGIN)
+    m = np.log1p(30.0 / 3)
+    assert tree.mean_point_log_evidence == pytest.approx(m)
+    assert tree.effective_evidence_cap == pytest.approx(3.7 * m ** 0.4)

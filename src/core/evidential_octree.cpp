@@ -167,7 +167,8 @@ InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& poin
 }
 
 void EvidentialOcTree::followEvidence(const std::vector<float>& evidence) {
-  if (config_.evidence_cap != SemanticConfig::kAdaptiveCap || config_.rule != "dempster") return;
+  // Kept whatever the cap, so that a map built with a fixed cap can be read adaptively later.
+  if (config_.rule != "dempster") return;
   // Every 4th point is plenty for a mean over a scan and keeps this off the insert's cost.
   const size_t C = static_cast<size_t>(num_classes_), n = evidence.size() / C;
   for (size_t i = 0; i < n; i += 4) {

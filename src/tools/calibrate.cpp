@@ -2,8 +2,8 @@
 // evidence_cap) on labelled scans of a user's own network (a validation split). The scans are
 // mapped once as `map` maps them; the cap that minimises the Brier score of the map on their GT
 // points (golden-section search over ln cap) is written as a parameter file that the node loads
-// (rosparam: `evidence_cap`), and printed for `map --evidence-cap` and
-// Python's SemanticConfig(evidence_cap=...). Without it the cap follows the evidence
+// (rosparam: `evidence_cap`), `map` and `eval` read (--calibration FILE) and Python reads
+// (evidential_octomap.read_calibration). Without it the cap follows the evidence
 // (SemanticConfig::kAdaptiveCap), with constants chosen across datasets.
 #include <cmath>
 #include <fstream>
@@ -78,7 +78,9 @@ void runCalibrate(const CalibrateOptions& o) {
        << "# " << o.data << " (" << scans.size() << " scans, " << queries.size()
        << " GT points, evidence " << describeEvidence(ev) << ").\n"
        << "# Brier score " << best << " (adaptive cap " << adaptive << ": " << with_adaptive
-       << "). Load it as node parameters (rosparam) or pass --evidence-cap to the CLI.\n"
+       << "). Load it as node parameters (rosparam load, or the launch files' config:=),\n"
+       << "# pass it to `evidential_octomap map --calibration FILE`, or read it in Python with\n"
+       << "# evidential_octomap.read_calibration(FILE).\n"
        << "evidence_cap: " << cap << "\n";
   writeFileAtomically(o.out, file.str());
   std::cout << std::setprecision(4) << "evidence cap " << cap << ": Brier " << best

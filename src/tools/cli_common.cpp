@@ -1,6 +1,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "calibration_file.h"
 #include "commands.h"
 #include "evidential_octomap/settings.h"
 
@@ -48,6 +49,17 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
         },
         s.field);
   }
+}
+
+void addCalibrationOption(CLI::App* cmd, double* evidence_cap) {
+  CLI::Option* calibration =
+      cmd->add_option_function<std::string>(
+             "--calibration",
+             [evidence_cap](const std::string& path) { *evidence_cap = readCalibrationCap(path); },
+             "Read the dempster read-out cap from a file written by `calibrate` (instead of "
+             "--evidence-cap)")
+          ->check(CLI::ExistingFile);
+  if (CLI::Option* cap = cmd->get_option_no_throw("--evidence-cap")) calibration->excludes(cap);
 }
 
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_name) {

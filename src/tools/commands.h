@@ -32,6 +32,8 @@ void addDataOptions(CLI::App* cmd, std::string* data, const std::string& data_he
                     std::string* classes);
 // Mapping parameters of SemanticConfig plus the tree resolution.
 void addConfigOptions(CLI::App* cmd, SemanticConfig* config, double* resolution);
+// `--calibration FILE` (a file `calibrate` wrote): sets *evidence_cap; excludes --evidence-cap.
+void addCalibrationOption(CLI::App* cmd, double* evidence_cap);
 // --evidence, -E, --knn-k, --knn-radius, --learned-model; the source name is parsed into
 // options->source, and an empty model path set to its default, by finishEvidenceOptions().
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* options, std::string* source_name);

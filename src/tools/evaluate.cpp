@@ -108,6 +108,7 @@ void addEvalCommand(CLI::App& app) {
   cmd->add_option("--evidence-cap", o->evidence_cap,
                   "dempster: read the opinions with this evidence cap instead of the map's own "
                   "(0: no cap); the stored evidence is unchanged");
+  addCalibrationOption(cmd, &o->evidence_cap);
   cmd->add_flag("--synthetic-predictions", o->synthetic,
                 "Input predictions = GT with the synthetic noise model (as `map`)");
   cmd->add_option("--noise-point-rate", o->noise.point_rate, "Synthetic point-noise rate")

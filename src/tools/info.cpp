@@ -47,6 +47,11 @@ void runInfo(const std::string& path) {
   tree->config().print(params);
   std::istringstream lines(params.str());
   for (std::string line; std::getline(lines, line);) std::cout << "  " << line << "\n";
+  if (tree->config().rule == "dempster") {
+    std::cout << "read-out cap:    " << tree->effectiveEvidenceCap()
+              << (tree->config().evidence_cap == SemanticConfig::kAdaptiveCap ? " (adaptive" : " (fixed")
+              << "; mean point log-evidence m = " << tree->meanPointLogEvidence() << ")\n";
+  }
   std::cout << "classes (leaves labelled):\n";
   for (int c = 0; c < tree->numClasses(); ++c) {
     std::cout << "  " << std::setw(3) << c << " " << std::left << std::setw(16)

@@ -132,6 +132,7 @@ void addMapCommand(CLI::App& app) {
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
       ->capture_default_str();
   addConfigOptions(cmd, &o->config, &o->resolution);
+  addCalibrationOption(cmd, &o->config.evidence_cap);
   addEvidenceOptions(cmd, &o->evidence, &o->evidence_name);
   cmd->add_flag("--synthetic-predictions", o->synthetic,
                 "Replace predictions by GT corrupted with the synthetic noise model (for data "

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Writes every table and picture of docs/results.md and the pages it links: results_tables.md
+# (every rule x evidence source x protocol on the bundled scans), results_ablation.md (kernel
+# ablations of the default), images/quality_learned.png, and the cross-dataset block,
+# calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
+# cross_dataset.sh). Each page is stamped with the commit and date.
+#   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+out="${1:-${root}/out/results}"
+cli="${CLI:-${root}/build/core/src/tools/evidential_octomap}"
+kitti=(--data "${root}/data/semantickitti_08_first10"
+  --classes "${root}/config/classes_semantickitti.yaml")
+stamp="commit $(git -C "${root}" rev-parse --short HEAD), $(date -u +%Y-%m-%d)"
+mkdir -p "${out}"
+
+# docs/<page>: a title, what made it, then the compare.md of <dir> verbatim.
+publish() {
+  local page="$1" title="$2" dir="$3" command="$4"
+  { printf '# %s\n\nOutput of `%s`, verbatim (`compare.md`; %s, written by scripts/results.sh).\n\n' \
+      "${title}" "${command}" "${stamp}"
+    cat "${dir}/compare.md"; } > "${root}/docs/${page}"
+}
+
+"${cli}" compare "${kitti[@]}" --sources onehot,knn-vote,confusion,learned \
+  --variants dempster,sbki,ebs,reference_compat --protocols reconstruction,held-out \
+  --out "${out}/compare_all" --quiet > /dev/null
+publish results_tables.md "Every rule, every evidence source, both protocols (bundled data)" \
+  "${out}/compare_all" "evidential_octomap compare --sources onehot,knn-vote,confusion,learned --variants dempster,sbki,ebs,reference_compat --protocols reconstruction,held-out"
+
+ablation="dempster,ebs,dempster:ds_multiplier=2,dempster:ds_multiplier=3,dempster:ds_multiplier=8"
+ablation+=",dempster:length_scale=0.25,dempster:length_scale=0.35,dempster:sigma0=0.7"
+ablation+=",dempster:beta=0.5,dempster:downsampling=average"
+"${cli}" compare "${kitti[@]}" --sources onehot,learned --protocols reconstruction,held-out \
+  --no-rellis --variants "${ablation}" --out "${out}/ablation" --quiet > /dev/null
+publish results_ablation.md "Kernel and down-sampling ablations of the default (bundled data)" \
+  "${out}/ablation" "evidential_octomap compare --sources onehot,learned --protocols reconstruction,held-out --no-rellis --variants ${ablation}"
+
+"${cli}" map "${kitti[@]}" --evidence learned --out "${out}/learned" -q > /dev/null
+cp "${out}/learned/quality.png" "${root}/docs/images/quality_learned.png"
+
+SCANS="${SCANS:-12}" bash "${root}/scripts/calibration/cross_dataset.sh" "${out}/cross_dataset"
