@@ -7,6 +7,7 @@
 //   evidential_sequence_bench --data DIR --classes YAML --order revisit --scans 10 --steps 60
 //   evidential_sequence_bench --data out/long --classes out/long/classes.yaml --order forward
 //   evidential_sequence_bench ... --only exact   # one method alone: its RSS after every step
+//   evidential_sequence_bench ... --methods plain,exact,occupied_only
 //
 // Evidence is derived: one-hot of the predicted class x 20. Timers only; nothing here is a test.
 #include <evidential_octomap/evidential_octree.h>
@@ -18,6 +19,7 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -29,6 +31,7 @@ namespace {
 
 struct Options {
   std::string data, classes, csv = "sequence.csv", order = "revisit", only;
+  std::string methods = "plain,exact,live";  // interleaved; --only: one alone (its own RSS)
   int scans = 0;   // revisit: distinct scans (0: 10); forward: the first N (0: every scan)
   int steps = 60;  // revisit only
   double range = 50.0, resolution = 0.2;
@@ -43,6 +46,7 @@ Options parse(int argc, char** argv) {
       {"--csv", [&](const std::string& v) { o.csv = v; }},
       {"--order", [&](const std::string& v) { o.order = v; }},
       {"--only", [&](const std::string& v) { o.only = v; }},
+      {"--methods", [&](const std::string& v) { o.methods = v; }},
       {"--scans", [&](const std::string& v) { o.scans = std::stoi(v); }},
       {"--steps", [&](const std::string& v) { o.steps = std::stoi(v); }},
       {"--range", [&](const std::string& v) { o.range = std::stod(v); }},
@@ -62,19 +66,34 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
+// The exact insert with semantic evidence only in occupied voxels (semantic_occupied_only): how
+// cheap fewer kernel rows make it (a different map).
+std::unique_ptr<evbench::Method> occupiedOnlyMethod(double range) {
+  auto m = evbench::semanticMethod(range, 2, false, "dempster");
+  m->key = "occupied_only";
+  m->label = "semantic insert, exact, semantic_occupied_only";
+  static_cast<evbench::SemanticMethod&>(*m).config.semantic_occupied_only = true;
+  return m;
+}
+
+// The methods named in `list` (comma-separated keys), in that order.
 std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
-  std::vector<std::unique_ptr<evbench::Method>> all;
-  all.push_back(evbench::plainMethod(o.range, false));
-  all.push_back(evbench::semanticMethod(o.range, 2, false, "dempster"));
-  all.push_back(evbench::liveMethod(o.range, false));
-  if (o.only.empty()) return all;
-  for (auto& m : all)
-    if (m->key == o.only) {
-      std::vector<std::unique_ptr<evbench::Method>> one;
-      one.push_back(std::move(m));
-      return one;
-    }
-  throw std::invalid_argument("--only is plain, exact or live");
+  std::vector<std::unique_ptr<evbench::Method>> out;
+  std::stringstream in(o.only.empty() ? o.methods : o.only);
+  std::string key;
+  while (std::getline(in, key, ',')) {
+    if (key == "plain")
+      out.push_back(evbench::plainMethod(o.range, false));
+    else if (key == "exact")
+      out.push_back(evbench::semanticMethod(o.range, 2, false, "dempster"));
+    else if (key == "live")
+      out.push_back(evbench::liveMethod(o.range, false));
+    else if (key == "occupied_only")
+      out.push_back(occupiedOnlyMethod(o.range));
+    else
+      throw std::invalid_argument("methods are plain, exact, live, occupied_only: " + key);
+  }
+  return out;
 }
 
 // Scans by index: the revisit keeps its few distinct scans, a forward run loads each once.

@@ -15,7 +15,9 @@ from collections import defaultdict
 METHODS = [("plain", "plain OcTree::insertPointCloud"),
            ("exact", "semantic insert, exact (library defaults)"),
            ("live", "live launch settings (fast free space, length_scale 0.2, ds_multiplier 2, "
-                    "evidence_floor 0.01)")]
+                    "evidence_floor 0.01)"),
+           ("occupied_only", "semantic insert, exact, semantic_occupied_only (evidence in occupied "
+                             "voxels only: a different map)")]
 STEADY = (10, 30)  # steps 10-29 of the revisit: the map already knows the area
 
 
@@ -48,8 +50,13 @@ def phase_rows(data, phases):
            "|---|---|---|---|---|---|---|"]
     plain = data["plain"]
     for key, label in METHODS:
+        if key not in data:
+            continue
         rows = data[key]
         for name, lo, hi in phases:
+            hi = min(hi, len(plain), len(rows))
+            if lo >= hi:
+                continue  # a run stopped before this phase
             cpu = total(rows, "cpu_ms", lo, hi) / total(plain, "cpu_ms", lo, hi)
             wall = total(rows, "wall_ms", lo, hi) / total(plain, "wall_ms", lo, hi)
             parts = "–" if key == "plain" else " / ".join(
@@ -133,6 +140,7 @@ def main():
     p.add_argument("--revisit", required=True)
     p.add_argument("--long", action="append", default=[], help="method=csv of an --only run")
     p.add_argument("--long-label", default="long generated sequence (SYNTHETIC)")
+    p.add_argument("--fewer-rows", help="a revisit run with occupied_only beside plain and exact")
     p.add_argument("--png", required=True)
     p.add_argument("--png-link", required=True, help="the PNG's path as the markdown links it")
     a = p.parse_args()
@@ -143,6 +151,14 @@ def main():
              "still filling; steady state = steps 10–29, a map that already knows the area.", ""]
     lines += phase_rows(revisit, [("first pass", 0, 10), ("steady state", *STEADY),
                                   ("whole run", 0, len(revisit["plain"]))])
+    if a.fewer_rows:
+        fewer = read(a.fewer_rows)
+        steps = len(fewer["plain"])
+        lines += ["", "### Fewer kernel rows: semantic evidence in occupied voxels only",
+                  "", "What the kernel costs when only occupied voxels get rows "
+                  "(`semantic_occupied_only`, an existing option that changes the map): another "
+                  f"interleaved run of {steps} revisit steps.", ""]
+        lines += phase_rows(fewer, [("first pass", 0, 10), ("steady state", 10, min(30, steps))])
     if long:
         lines += ["", f"### {a.long_label}", "", "Each scan inserted once, each method alone in its "
                   "process (so no ratios here: the revisit gives them).", ""]

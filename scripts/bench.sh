@@ -160,14 +160,29 @@ if ((write_docs)); then
       cat "${sequences}/meta.txt"
       echo '```'
       echo
-      long=()
+      report=()
       for m in plain exact live; do
-        [[ -f "${sequences}/long_${m}.csv" ]] && long+=(--long "${m}=${sequences}/long_${m}.csv")
+        [[ -f "${sequences}/long_${m}.csv" ]] && report+=(--long "${m}=${sequences}/long_${m}.csv")
       done
+      [[ -f "${sequences}/occupied_only.csv" ]] && report+=(--fewer-rows "${sequences}/occupied_only.csv")
       /usr/bin/python3 "${root}/bench/sequence_report.py" --revisit "${sequences}/revisit.csv" \
         --long-label "Long sequence: SYNTHETIC generated forest trail (2 m a scan)" \
-        ${long[@]+"${long[@]}"} --png "${root}/docs/images/bench_cpu_per_scan.png" \
+        ${report[@]+"${report[@]}"} --png "${root}/docs/images/bench_cpu_per_scan.png" \
         --png-link images/bench_cpu_per_scan.png
+      if [[ -f "${sequences}/live_rate/summary.json" ]]; then
+        echo
+        echo "### The live node fed by the player (bench/live_rate.py)"
+        echo
+        echo "\`mapping.launch\` and \`play_semantickitti.py\` looping the bundled scans, on the same 2 cores;"
+        echo "figures after the first minute (\`~status\`), from \`${sequences##*/}/live_rate/summary.json\`:"
+        echo
+        /usr/bin/python3 -c 'import json, sys
+s = json.load(open(sys.argv[1]))
+print("| figure | value |\n|---|---|")
+for k, v in s.items():
+    print("| %s | %s |" % (k, " ".join(v) if isinstance(v, list) else (round(v, 2) if isinstance(v, float) else v)))' \
+          "${sequences}/live_rate/summary.json"
+      fi
       if [[ -f "${sequences}/profile.md" ]]; then
         echo
         echo "### Profile of the exact insert (scripts/bench_profile.sh)"

@@ -2,7 +2,8 @@
 # Builds the core and its tests with AddressSanitizer + UndefinedBehaviorSanitizer
 # (-DEVIDENTIAL_OCTOMAP_SANITIZE=ON) in build/sanitize and runs ctest there.
 #   scripts/sanitize.sh [-j N] [ctest arguments...]    e.g. scripts/sanitize.sh -j 2 -R reliability
-# Environment: BUILD_DIR (default build/sanitize), CXX (compiler); EVIDENTIAL_SOAK_SCANS (100),
+# Environment: BUILD_DIR (default build/sanitize), CXX (compiler), SANITIZE_TOOLS (ON: the CLI
+# and its tests too, the whole ctest suite; OFF: core only); EVIDENTIAL_SOAK_SCANS (100),
 # EVIDENTIAL_FUZZ_MUTATIONS (1000), EVIDENTIAL_KILL_TRIALS (20) shorten the reliability tests.
 # The reliability tests (test/reliability) are part of the run when test/CMakeLists.txt adds
 # them; until then they are built and run standalone in $BUILD_DIR/reliability.
@@ -27,7 +28,7 @@ export EVIDENTIAL_KILL_TRIALS="${EVIDENTIAL_KILL_TRIALS:-20}"
 
 configure() {  # <source> <build>
   cmake -S "$1" -B "$2" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DEVIDENTIAL_OCTOMAP_SANITIZE=ON \
-    -DEVIDENTIAL_OCTOMAP_TOOLS=OFF -DBUILD_TESTING=ON >"$2.configure.log" 2>&1 || {
+    -DEVIDENTIAL_OCTOMAP_TOOLS="${SANITIZE_TOOLS:-ON}" -DBUILD_TESTING=ON >"$2.configure.log" 2>&1 || {
       tail -n 30 "$2.configure.log"; echo "sanitize: configure of $1 failed"; exit 1; }
 }
 

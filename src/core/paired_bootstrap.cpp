@@ -13,12 +13,13 @@ namespace evidential_octomap {
 std::vector<uint32_t> spatialBlocks(const std::vector<Query>& queries, double block_size,
                                     size_t* blocks) {
   if (!(block_size > 0.0)) throw std::invalid_argument("spatialBlocks: block_size must be > 0");
-  std::unordered_map<int64_t, uint32_t> id;
+  std::unordered_map<uint64_t, uint32_t> id;
   std::vector<uint32_t> block(queries.size());
   for (size_t i = 0; i < queries.size(); ++i) {
     const int64_t x = int64_t(std::floor(queries[i].point_W.x() / block_size));
     const int64_t y = int64_t(std::floor(queries[i].point_W.y() / block_size));
-    const int64_t key = (x << 32) ^ (y & 0xffffffff);
+    // Shifted as unsigned: a left shift of a negative int64 is undefined (UBSan, x < 0).
+    const uint64_t key = (uint64_t(x) << 32) ^ (uint64_t(y) & 0xffffffffu);
     block[i] = id.emplace(key, uint32_t(id.size())).first->second;
   }
   if (blocks != nullptr) *blocks = id.size();

@@ -34,7 +34,9 @@ void colourBar(cv::Mat* image, int left, int top, const std::string& title, doub
   std::snprintf(label, sizeof(label), "%.2g", 0.5 * (lo + hi));
   text(image, label, left + L::kBarWidth / 2 - 10, below, 0.4);
   std::snprintf(label, sizeof(label), "%.2g", hi);
-  text(image, label, left + L::kBarWidth - 22, below, 0.4);
+  int unused_baseline = 0;  // right-aligned under the bar's end, whatever its length
+  const int width = cv::getTextSize(label, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &unused_baseline).width;
+  text(image, label, left + L::kBarWidth - width, below, 0.4);
 }
 
 void swatch(cv::Mat* image, int i, int num_classes, const cv::Scalar& colour,
@@ -54,7 +56,8 @@ cv::Mat renderLegend(const ClassTable& classes, const UncertaintyRange& range,
   for (int c = 0; c < C; ++c)
     swatch(&image, c, C, rgb(classes.colors[c]), std::to_string(c) + " " + classes.names[c]);
   swatch(&image, C, C, cv::Scalar(128, 128, 128), "no evidence");
-  colourBar(&image, L::barLeft(0), L::barTop(C), uncertainty_name, range.min, range.max);
+  colourBar(&image, L::barLeft(0), L::barTop(C),
+            uncertainty_name + (range.automatic ? " (5-95 %)" : ""), range.min, range.max);
   colourBar(&image, L::barLeft(1), L::barTop(C), "conflict", 0.0, 1.0);
   return image;
 }

@@ -79,7 +79,9 @@ void MapOutputs::markStale() {
 
 std::string MapOutputs::publish(const EvidentialOcTree& tree, const ClassTable& classes,
                                 const octomap::point3d& origin_W, bool force) {
-  if (!legend_sent_) publishLegend(classes, config_.uncertainty_range, uncertaintyName(tree));
+  // Until the uncertainty view is built, the legend shows the configured range, not yet fitted.
+  if (!legend_sent_)
+    publishLegend(classes, resolveRange({}, config_.uncertainty_range), uncertaintyName(tree));
   std::string sent = publishViews(tree, classes, origin_W, force);
   sent += publishMaps(tree, classes, force);
   if (octomap_msgs_) sent += octomap_msgs_->publish(tree, classes, force);

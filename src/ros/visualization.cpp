@@ -1,6 +1,7 @@
 #include "visualization.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "evidential_octomap/io.h"
 
@@ -63,14 +64,18 @@ visualization_msgs::MarkerArray semanticMarkers(const std::vector<VoxelView>& vo
 }
 
 UncertaintyRange resolveRange(const std::vector<VoxelView>& voxels, const UncertaintyRange& range) {
-  UncertaintyRange fixed{false, range.min, range.max};
-  if (!range.automatic || voxels.empty()) return fixed;
-  fixed.min = fixed.max = voxels.front().uncertainty;
-  for (const VoxelView& v : voxels) {
-    fixed.min = std::min<double>(fixed.min, v.uncertainty);
-    fixed.max = std::max<double>(fixed.max, v.uncertainty);
-  }
-  return fixed;
+  if (!range.automatic || voxels.empty()) return {false, range.min, range.max};
+  // Fitted to the map's u distribution: its 5th to 95th percentile spans the colour map (most
+  // voxels sit near the read-out floor; min..max would give them all one colour).
+  std::vector<float> u;
+  u.reserve(voxels.size());
+  for (const VoxelView& v : voxels) u.push_back(v.uncertainty);
+  auto percentile = [&](double q) {
+    auto nth = u.begin() + std::lround(q * double(u.size() - 1));
+    std::nth_element(u.begin(), nth, u.end());
+    return double(*nth);
+  };
+  return {true, percentile(0.05), percentile(0.95)};
 }
 
 namespace {

@@ -14,7 +14,8 @@
 
 namespace evidential_octomap {
 
-// Colour range of the uncertainty view: fixed [min, max] or the shown voxels' own range.
+// Colour range of the uncertainty view: fixed [min, max], or automatic: fitted to the shown
+// voxels' u, their 5th to 95th percentile.
 struct UncertaintyRange {
   bool automatic = false;
   double min = 0.0;
@@ -25,7 +26,8 @@ visualization_msgs::MarkerArray semanticMarkers(const std::vector<VoxelView>& vo
                                                 const ClassTable& classes,
                                                 const std::string& frame_id, unsigned tree_depth);
 
-// The range actually drawn: `range` itself, or the voxels' own min..max when automatic.
+// The range actually drawn: `range` itself, or the voxels' 5th..95th percentile of u when
+// automatic (then `automatic` stays true, for the legend).
 UncertaintyRange resolveRange(const std::vector<VoxelView>& voxels, const UncertaintyRange& range);
 
 visualization_msgs::MarkerArray uncertaintyMarkers(const std::vector<VoxelView>& voxels,

@@ -161,31 +161,74 @@ cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
   return canvas;
 }
 
-cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const UncertaintyScale& scale,
-                         const TopDownGrid& g) {
+namespace {
+
+// Colour by rank: a map's u is far from uniform (most voxels sit near the read-out floor, a few
+// are high), so a linear 0..1 scale paints nearly the whole map one colour. Here equal colour
+// steps hold equal shares of the drawn voxels, and the legend gives u at those shares.
+class QuantileScale {
+ public:
+  explicit QuantileScale(std::vector<double> values) : sorted_(std::move(values)) {
+    std::sort(sorted_.begin(), sorted_.end());
+  }
+  // Share of the drawn voxels below u (ties take the middle of their run), in [0, 1].
+  double colourPosition(double u) const {
+    if (sorted_.size() < 2) return 0.0;
+    const auto lo = std::lower_bound(sorted_.begin(), sorted_.end(), u);
+    const auto hi = std::upper_bound(lo, sorted_.end(), u);
+    const double rank = 0.5 * double((lo - sorted_.begin()) + (hi - sorted_.begin()) - 1);
+    return std::clamp(rank / double(sorted_.size() - 1), 0.0, 1.0);
+  }
+  double quantile(double q) const {
+    if (sorted_.empty()) return 0.0;
+    return sorted_[size_t(std::lround(q * double(sorted_.size() - 1)))];
+  }
+
+ private:
+  std::vector<double> sorted_;
+};
+
+// u of the highest occupied leaf of every column that has semantics (what the picture draws).
+QuantileScale drawnUncertainties(const EvidentialOcTree& tree, const std::vector<TopLeaf>& top) {
+  std::vector<double> u;
+  for (const TopLeaf& t : top)
+    if (t.node && t.node->hasSemantics()) u.push_back(tree.opinion(t.node).uncertainty);
+  return QuantileScale(std::move(u));
+}
+
+cv::Mat drawUncertainty(const EvidentialOcTree& tree, const std::vector<TopLeaf>& top,
+                        const QuantileScale& scale, const TopDownGrid& g) {
   cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
-  const auto top = topLeaves(tree, g);
   for (int r = 0; r < g.height; ++r)
     for (int c = 0; c < g.width; ++c) {
       const TopLeaf& t = top[size_t(r) * g.width + c];
       if (!t.node) continue;
-      if (!t.node->hasSemantics()) {
-        map.at<cv::Vec3b>(r, c) = kNoSemantics;
-        continue;
-      }
-      map.at<cv::Vec3b>(r, c) = bgr(uncertaintyColor(scale.apply(tree.opinion(t.node).uncertainty)));
+      map.at<cv::Vec3b>(r, c) =
+          t.node->hasSemantics()
+              ? bgr(uncertaintyColor(scale.colourPosition(tree.opinion(t.node).uncertainty)))
+              : kNoSemantics;
     }
   return map;
 }
 
-cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& scale,
+}  // namespace
+
+cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const TopDownGrid& g) {
+  const auto top = topLeaves(tree, g);
+  return drawUncertainty(tree, top, drawnUncertainties(tree, top), g);
+}
+
+cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& kind,
                           const TopDownGrid& g, const std::vector<std::string>& caption) {
-  cv::Mat map = uncertaintyLayer(tree, scale, g);
+  const auto top = topLeaves(tree, g);
+  const QuantileScale scale = drawnUncertainties(tree, top);
+  cv::Mat map = drawUncertainty(tree, top, scale, g);
   drawScaleBar(map, g);
   cv::Mat panel;
   cv::Mat canvas = compose(map, caption, &panel);
-  // Vertical colour bar: certain (0) at the bottom, uncertain (1) at the top.
-  const int bar_h = std::min(240, panel.rows - 60);
+  // Vertical colour bar: the lowest u at the bottom, the highest at the top, with u at the
+  // 0, 25, 50, 75 and 100 % shares of the drawn voxels.
+  const int bar_h = std::min(240, panel.rows - 130);
   for (int y = 0; y < bar_h; ++y) {
     const double t = 1.0 - double(y) / std::max(1, bar_h - 1);
     const cv::Vec3b col = bgr(uncertaintyColor(t));
@@ -197,13 +240,16 @@ cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& 
     cv::putText(panel, text, cv::Point(48, y), cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(0, 0, 0),
                 1, cv::LINE_AA);
   };
-  std::ostringstream hi, lo;
-  hi << std::setprecision(3) << (scale.scaled ? scale.max : 1.0);
-  lo << std::setprecision(3) << (scale.scaled ? scale.min : 0.0);
-  label(30, "u = " + hi.str() + (scale.scaled ? " (max)" : ""));
-  label(20 + bar_h, "u = " + lo.str() + (scale.scaled ? " (min)" : ""));
-  label(40 + bar_h, scale.scaled ? "min-max scaled" : "u is a mass");
-  legendEntry(panel, (bar_h + 50) / kLine, kNoSemantics, "no evidence");
+  for (int i = 0; i <= 4; ++i) {
+    std::ostringstream s;
+    s << std::setprecision(3) << "u = " << scale.quantile(i / 4.0) << " (" << 25 * i << " %)";
+    label(25 + int((1.0 - i / 4.0) * (bar_h - 1)), s.str());
+  }
+  label(44 + bar_h, "quantile scale: each");
+  label(60 + bar_h, "step = an equal share");
+  label(76 + bar_h, "of the drawn voxels");
+  label(92 + bar_h, kind.scaled ? "(u: Dirichlet variance)" : "(u: a mass)");
+  legendEntry(panel, (bar_h + 110) / kLine, kNoSemantics, "no evidence");
   return canvas;
 }
 

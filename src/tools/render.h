@@ -40,8 +40,9 @@ cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& quer
 // the mix of right (green), wrong (red) and unlabelled (blue) queries.
 cv::Mat semanticLayer(const EvidentialOcTree& tree, const ClassTable& classes,
                       const TopDownGrid& grid, std::set<int>* classes_shown = nullptr);
-cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const UncertaintyScale& scale,
-                         const TopDownGrid& grid);
+// Uncertainty is coloured on a quantile scale of the drawn voxels' u (equal colour steps =
+// equal shares of the voxels; the legend of renderUncertainty gives u at 0/25/50/75/100 %).
+cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const TopDownGrid& grid);
 cv::Mat errorLayer(const EvidentialOcTree& tree, const std::vector<Query>& queries,
                    const TopDownGrid& grid);
 

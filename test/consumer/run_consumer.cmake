@@ -33,3 +33,4 @@ run_step("configure consumer" ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${consumer_bu
   ${generator_args} -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${prefix})
 run_step("build consumer" ${CMAKE_COMMAND} --build ${consumer_build})
 run_step("run consumer" ${consumer_build}/app ${WORK_DIR}/consumer_map.ot)
+run_step("run planner example" ${consumer_build}/planner_example ${WORK_DIR}/consumer_map.ot)

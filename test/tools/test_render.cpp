@@ -69,11 +69,18 @@ TEST(SemanticLayer, ShowsTheHighestOccupiedLeafInClassColours) {
   EXPECT_EQ(shown, (std::set<int>{2}));
 }
 
-TEST(UncertaintyLayer, UsesTheSharedColourMap) {
+// Quantile scale: of the two drawn semantic columns (b: u = 1/3 alone; c over a: u = 1/3 too)
+// both tie, so both take the middle colour; a third, more uncertain voxel takes the top colour
+// and pushes the tied ones to the bottom share.
+TEST(UncertaintyLayer, ColoursByTheRankOfUAmongTheDrawnVoxels) {
   Scene s;
   const TopDownGrid g = makeGrid(s.tree, nullptr);
-  const cv::Mat m = uncertaintyLayer(s.tree, uncertaintyScale(s.tree), g);
-  EXPECT_EQ(m.at<cv::Vec3b>(3, 2), bgr(uncertaintyColor(1.0 / 3.0)));
+  EXPECT_EQ(uncertaintyLayer(s.tree, g).at<cv::Vec3b>(3, 2), bgr(uncertaintyColor(0.5)));
+  s.set(s.d, {0.0f, 0.1f, 0.0f});  // d: weak evidence, u close to 1
+  const cv::Mat m = uncertaintyLayer(s.tree, g);
+  EXPECT_EQ(m.at<cv::Vec3b>(1, 2), bgr(uncertaintyColor(1.0)));        // d, the most uncertain
+  EXPECT_EQ(m.at<cv::Vec3b>(3, 2), bgr(uncertaintyColor(0.25)));       // b: ranks 0-1 of 0..2
+  EXPECT_EQ(m.at<cv::Vec3b>(3, 0), m.at<cv::Vec3b>(3, 2));             // c ties with b
 }
 
 TEST(ErrorLayer, RightWrongAndUncoveredQueriesHaveTheirColours) {
