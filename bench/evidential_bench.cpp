@@ -1,4 +1,4 @@
-// evidential_bench: the performance figures of issue 13, measured in one run.
+// evidential_bench: the performance figures of bench/README.md, measured in one run.
 //
 // Every method keeps its own map and the methods take turns scan by scan (the order rotated
 // each scan), so a change in the shared machine's load hits them all alike:

@@ -34,7 +34,7 @@ add_service_files(DIRECTORY srv FILES
   SaveMap.srv)
 generate_messages(DEPENDENCIES std_msgs geometry_msgs)
 
-# Run-time parameters (DESIGN §5): dynamic_reconfigure's C++ server and cfg generator are in
+# Run-time parameters: dynamic_reconfigure's C++ server and cfg generator are in
 # Debian's libdynamic-reconfigure-config-init-mutex-dev / python3-dynamic-reconfigure.
 generate_dynamic_reconfigure_options(src/ros/cfg/Mapping.cfg)
 

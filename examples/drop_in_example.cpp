@@ -1,8 +1,7 @@
 // Drop-in use of evidential_octomap: the tree is an OctoMap occupancy tree that also fuses
 // per-point semantic evidence (e.g. from an evidential segmentation network).
 //   example_drop_in [out.ot]
-#include <evidential_octomap/evidential_octree.h>
-#include <octomap/octomap.h>
+#include <evidential_octomap/evidential_octomap.h>  // the whole map library, and OctoMap
 
 #include <iostream>
 #include <memory>

@@ -5,6 +5,7 @@
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
 # cross_dataset.sh). Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
+# CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 out="${1:-${root}/out/results}"
@@ -19,7 +20,7 @@ publish() {
   local page="$1" title="$2" dir="$3" command="$4"
   { printf '# %s\n\nOutput of `%s`, verbatim (`compare.md`; %s, written by scripts/results.sh).\n\n' \
       "${title}" "${command}" "${stamp}"
-    cat "${dir}/compare.md"; } > "${root}/docs/${page}"
+    sed "s|${root}/||g" "${dir}/compare.md"; } > "${root}/docs/${page}"
 }
 
 "${cli}" compare "${kitti[@]}" --sources onehot,knn-vote,confusion,learned \
@@ -39,4 +40,6 @@ publish results_ablation.md "Kernel and down-sampling ablations of the default (
 "${cli}" map "${kitti[@]}" --evidence learned --out "${out}/learned" -q > /dev/null
 cp "${out}/learned/quality.png" "${root}/docs/images/quality_learned.png"
 
-SCANS="${SCANS:-12}" bash "${root}/scripts/calibration/cross_dataset.sh" "${out}/cross_dataset"
+if [ "${CROSS:-1}" != 0 ]; then
+  SCANS="${SCANS:-12}" bash "${root}/scripts/calibration/cross_dataset.sh" "${out}/cross_dataset"
+fi

@@ -1,4 +1,4 @@
-// A slow, obviously-correct reference for the reduced Dempster rule of DESIGN §1, in long
+// A slow, obviously-correct reference for the reduced Dempster rule (docs/design.md), in long
 // double and in belief space, with the conflict summed pair by pair in O(C^2). The tests
 // cross-check the library's belief-space function and its evidence-space map storage against it.
 #pragma once

@@ -1,4 +1,4 @@
-// Integrity of .ot files (issue 16 item 10): a CRC-32 over the semantic section and invariant
+// Integrity of .ot files: a CRC-32 over the semantic section and invariant
 // checks after reading, so an altered file never loads as a different map; files of formats 1
 // (no CRC) and 2 (inner payloads stored) still load; loadMap reads regular files only;
 // readProblem() tells in one call whether OctoMap's generic reader gave a complete map.
@@ -542,7 +542,7 @@ TEST(Integrity, SummariesAreDerivedAgainOnReading) {
   EXPECT_TRUE(compareTrees(*tree, *loaded));
 }
 
-// --- loadMap on what is not a regular file (issue 16 item 6) ---------------------------------
+// --- loadMap on what is not a regular file ------------------------------------------------
 
 // Runs loadMap(path) in a child with a 20 s alarm: a hang guard (opening a FIFO blocks until a
 // writer appears), not a timing assertion. Returns the child's exit status: 0 loaded, 1 threw

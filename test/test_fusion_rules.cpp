@@ -1,5 +1,5 @@
 // The three fusion rules behind FusionRule. The dempster rule stores evidence-space sums
-// (DESIGN §1 "the stable form"); these tests check it against sequential belief-space
+// (docs/design.md, "Fusion"); these tests check it against sequential belief-space
 // combination of the extended beliefs, in both orders, at the rule, tree and integrator level,
 // and over 10^6 fusions into one voxel beside a naive float belief-space rule that fails.
 #include <gtest/gtest.h>
@@ -396,7 +396,7 @@ NaiveFloatOpinion naiveCombine(const NaiveFloatOpinion& m1, const std::vector<fl
   return out;
 }
 
-// --- float absorption (issue 16 item 8): the map's float payload against the rule in long double
+// --- float absorption: the map's float payload against the rule in long double
 
 // One voxel updated the way the map updates it (rule.add of a scan's increments), beside the
 // long-double reference of the same rule (bounded storage, capped read-out).

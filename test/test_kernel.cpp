@@ -1,5 +1,5 @@
 // Sparse kernel of Melkumyan & Ramos, its adaptive length and the per-scan percentile threshold
-// (DESIGN §1). Expected values are worked out by hand in the comments.
+// (docs/design.md). Expected values are worked out by hand in the comments.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 // The kernel loop's precomputed kernel (kernel_pass.h): the table's error against the closed
 // form, and a whole scan's map against a direct evaluation written out here (every point, every
-// voxel of its support, sparseKernel and distanceToCube called as DESIGN §1 states them).
+// voxel of its support, sparseKernel and distanceToCube called as docs/design.md states them).
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -369,7 +369,7 @@ TEST(ParameterSpace, EveryResolutionIsSavedAndLoadedExactlyOrRefused) {
   std::remove(path.c_str());
 }
 
-// --- the kernel bound (issue 16 item 4) ---------------------------------------------------------
+// --- the kernel bound -----------------------------------------------------------------------
 
 TEST(KernelBound, SupportIsBoundedInLeaves) {
   SemanticConfig config;  // l = 0.3 m, beta 1 -> up to 0.3 e = 0.815 m

@@ -1,4 +1,4 @@
-// Subjective-logic opinions and the belief-space reduced Dempster rule (DESIGN §1), checked
+// Subjective-logic opinions and the belief-space reduced Dempster rule (docs/design.md), checked
 // against a long-double O(C^2) reference over thousands of random masses.
 #include <gtest/gtest.h>
 

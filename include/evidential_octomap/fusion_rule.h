@@ -1,4 +1,4 @@
-// One fusion interface, three rules (DESIGN §1): dempster (the paper), sbki, ebs.
+// One fusion interface, three rules (docs/design.md): dempster (the paper), sbki, ebs.
 //
 // Every rule keeps C floats per semantic voxel (the "payload") and every rule is additive in its
 // own representation, so a scan's contributions can be summed per voxel first and applied once:
@@ -75,7 +75,7 @@ class FusionRule {
 
 FusionRuleType fusionRuleFromName(const std::string& name);
 
-// Bound of the dempster payload, sum_c L^c (issue 16 item 8). A float holding L < 1024 keeps
+// Bound of the dempster payload, sum_c L^c. A float holding L < 1024 keeps
 // increments down to 2^-15 (3e-5); without a bound L passes 2^18 after ~10^4 scans of one voxel
 // and whole scans of evidence vanish in rounding. At the bound the map forgets old evidence in
 // proportion, like OctoMap's clamping: from there on the result depends on the order of the

@@ -1,4 +1,4 @@
-// The sparse kernel of Melkumyan & Ramos and its uncertainty-adaptive length (DESIGN §1).
+// The sparse kernel of Melkumyan & Ramos and its uncertainty-adaptive length (docs/design.md).
 #pragma once
 
 #include <vector>

@@ -1,4 +1,4 @@
-// Map and input metrics of DESIGN §6, one set for every row (the input and each rule), computed
+// Map and input metrics, one set for every row (the input and each rule), computed
 // on the same queries and defined so anyone can recompute them:
 //   queries     GT-labelled points (ignore class excluded) of the evaluated scans, world frame;
 //   answer      what a row says at a query: the map's voxel opinion (the voxel holds semantic

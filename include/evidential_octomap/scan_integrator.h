@@ -1,6 +1,6 @@
 // One scan into the map: OctoMap ray casting for occupancy, then one kernel loop that spreads
 // every kept point's extended belief to the leaves within its support, aggregated per voxel key
-// for the whole scan before each touched leaf is updated once (DESIGN §2).
+// for the whole scan before each touched leaf is updated once (docs/design.md).
 #pragma once
 
 #include <octomap/Pointcloud.h>

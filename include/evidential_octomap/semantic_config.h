@@ -1,5 +1,7 @@
-// Every semantic-mapping parameter in one place, with the defaults of DESIGN §1 written once.
-// ROS and the CLI fall back to these values; they never restate them.
+// Every semantic-mapping parameter in one place, each default written once. MapSettings are what
+// a stored map means (kept in its .ot header); InsertSettings say how an insert runs (not stored).
+// Their names, ranges and help are listed once in settings.h, from which ROS, the CLI, Python
+// and docs/parameters.md are made; they fall back to these values and never restate them.
 #pragma once
 
 #include <ostream>
@@ -7,7 +9,7 @@
 
 namespace evidential_octomap {
 
-struct SemanticConfig {
+struct MapSettings {
   // Fusion rule: "dempster" (the paper), "sbki" or "ebs".
   std::string rule = "dempster";
   // Kernel length scale l [m], kernel amplitude sigma0, adaptive-length factors beta and gamma.
@@ -79,12 +81,14 @@ struct SemanticConfig {
   double max_range = -1.0;
   // Let kernel updates create leaves in unknown space (densification, S-BKI style). Created
   // leaves start at occupancy log-odds 0 (p = 0.5), which OctoMap reads as occupied. Off by
-  // default: on the bundled sequence it gains little (held-out O.Acc 72.1 vs 71.4 %, mIoU of
-  // covered queries 42.6 vs 42.8 %, reconstruction identical) and puts phantom obstacles in
-  // front of real surfaces for castRay and planners. When false only existing leaves are touched.
+  // default: on the bundled sequence it gains little (docs/design.md) and puts phantom
+  // obstacles in front of real surfaces for castRay and planners. When false only existing leaves are touched.
   bool kernel_creates_leaves = false;
   // Insert occupancy through OctoMap's discretized ray casting (one ray per hit voxel).
   bool discretize = true;
+};
+
+struct InsertSettings {
   // Fast free space for live mapping (not exact): each ray is cast back from its end and stops
   // after two cells already cleared by this scan's other rays, so the many rays that overlap
   // near the sensor are cast once (voxblox's "fast" integrator rule). Hits, semantics and the
@@ -98,8 +102,7 @@ struct SemanticConfig {
   // meets a surface in a disc instead of a ball). An insertion setting: not stored in the map.
   bool semantic_occupied_only = false;
   // Point evidence below this value counts as 0 (0: off). An evidential network's softplus or
-  // exp head gives every class some evidence: the bundled learned model gives 20 non-zero values
-  // per point, of which 1.16 on average are >= 0.01. A contribution's log-evidence is below
+  // exp head gives every class some evidence, nearly all of it tiny. A contribution's log-evidence is below
   // evidence_floor / C for such a class and its uncertainty u = C / S moves by at most
   // C * evidence_floor / S, while each value kept costs work in the kernel and memory in the
   // map. 0.01 (1 % of one class's prior weight) makes learned evidence as cheap as one-hot
@@ -107,8 +110,8 @@ struct SemanticConfig {
   double evidence_floor = 0.0;
   // Moving objects leave no ghosts: each clearing observation of a voxel (a ray of a scan passes
   // through it and no ray ends in it) discounts the semantic evidence it holds after the scan,
-  // the kernel evidence this scan spread into it included (the scan itself saw it empty), so that after `clearing_observations` clearings without new evidence
-  // the voxel answers no class (its payload is released). Discounting keeps every class's share
+  // the kernel evidence this scan spread into it included (the scan itself saw it empty), so
+  // that after `clearing_observations` clearings without new evidence the voxel answers no class (its payload is released). Discounting keeps every class's share
   // (dempster: L^c scaled; sbki/ebs: alpha^c - prior scaled), so a voxel that is hit and only
   // sometimes passed through keeps its class. 0: off. An insertion setting: not stored in the map.
   // Sequential mapping only: a merge of chunk maps cannot apply one chunk's clearings to another
@@ -124,12 +127,13 @@ struct SemanticConfig {
 
   // Threads for the semantic pass (0 = OpenMP default).
   int threads = 0;
+};
 
+// Both halves together: what the tree keeps and the integrator reads.
+struct SemanticConfig : MapSettings, InsertSettings {
   // Largest kernel support radius, in leaves, that a scan may give any point. A point's kernel
-  // work grows with the cube of its support and a scan's memory with its reach: at this bound
-  // one 123k-point SemanticKITTI scan costs ~40 s CPU and ~2.6 GB (C = 20, every point at full
-  // support; docs/reliability.md), the default kernel (4 leaves) ~5 s and 0.8 GB; 680 leaves
-  // (l = 5, beta = 10 at 0.2 m) took 180 s for 16 points.
+  // work grows with the cube of its support and a scan's memory with its reach
+  // (docs/design.md gives a scan's measured cost at this bound and at the default).
   static constexpr double kMaxSupportLeaves = 10.0;
   // Bounds of the values a map may hold (the shared validation below).
   static constexpr double kMaxDsMultiplier = 1000.0;  // down-sampling cell >= resolution / 1000
@@ -145,9 +149,9 @@ struct SemanticConfig {
   // effective gamma is negative); an upper bound of what the integrator uses.
   double maxSupportLength() const;
 
-  // The one validation of these values, shared by the tree's setters, its file reader and writer,
-  // the ROS node's parameters and dynamic_reconfigure, and the CLI: "" when every value is
-  // usable, else the first one that is not, with its allowed range.
+  // The one validation of these values (the ranges of settings.h), shared by the tree's setters,
+  // its file reader and writer, the ROS node's parameters and dynamic_reconfigure, and the CLI:
+  // "" when every value is usable, else the first one that is not, with its allowed range.
   std::string problem() const;
   // "" when a scan with these settings is affordable in a map of leaf size `resolution`
   // (maxSupportLength() <= kMaxSupportLeaves * resolution), else what to change. Checked before

@@ -1,4 +1,4 @@
-// Subjective-logic opinions and the reduced Dempster rule in belief space (DESIGN §1).
+// Subjective-logic opinions and the reduced Dempster rule in belief space (docs/design.md).
 // The map itself stores the evidence-space form (see fusion_rule.h); these plain functions are
 // for users who want to combine opinions directly and for the cross-checks in the tests.
 #pragma once
@@ -31,6 +31,10 @@ Opinion dempsterCombine(const Opinion& m1, const Opinion& m2);
 // Checks one evidence vector: every value finite and >= 0. Returns an empty string when valid,
 // otherwise a message naming the offending class and value.
 std::string checkEvidence(const float* evidence, int num_classes);
+
+// The evidence E that a derived input (a hard label, or a confident probability vector) gives its
+// class: the one default of every such conversion (ROS, CLI, Python, the player).
+constexpr float kEvidenceMagnitude = 20.0f;
 
 // Conversions for inputs that are not raw evidence (docs/learned_evidence.md, "your own network").
 void evidenceFromAlpha(const float* alpha, int num_classes, float* evidence_out);   // e = alpha - 1

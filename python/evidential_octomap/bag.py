@@ -140,9 +140,9 @@ class MapOptions:
     resolution: float = 0.2
     config: dict = field(default_factory=dict)      # SemanticConfig fields by name
     input: str = "auto"                              # pointcloud2.INPUTS
-    label_magnitude: float = 20.0
+    label_magnitude: float = _core.EVIDENCE_MAGNITUDE
     logit_transform: str = "softmax"
-    probability_magnitude: float = 20.0
+    probability_magnitude: float = _core.EVIDENCE_MAGNITUDE
     raw_labels: bool = False                         # `label` holds raw ids (learning map)
     max_clouds: Optional[int] = None
 
@@ -353,7 +353,7 @@ class WriteOptions:
     storage: str = "mcap"            # ROS 2: mcap or sqlite3
     scans: Optional[int] = None      # the first N scans (None: all)
     evidence: str = "onehot"         # file, onehot, knn-vote or learned
-    magnitude: float = 20.0
+    magnitude: float = _core.EVIDENCE_MAGNITUDE
     learned_model: Optional[str] = None
     rate: float = 10.0               # scans per second of bag time
     start_ns: int = 1_000_000_000    # stamp of the first scan
@@ -556,12 +556,12 @@ def _add_map_arguments(p):
     p.add_argument("--input", default="auto", choices=pointcloud2.INPUTS,
                    help="semantic field to read (default auto: the first present of evidence, "
                    "alpha, logits, probabilities, label)")
-    p.add_argument("--label-magnitude", type=float, default=20.0,
+    p.add_argument("--label-magnitude", type=float, default=_core.EVIDENCE_MAGNITUDE,
                    help="evidence of a `label` field's class (default 20)")
     p.add_argument("--raw-labels", action="store_true",
                    help="`label` holds raw dataset ids (mapped by the class table)")
     p.add_argument("--logit-transform", default="softmax", choices=("softmax", "exp", "softplus"))
-    p.add_argument("--probability-magnitude", type=float, default=20.0)
+    p.add_argument("--probability-magnitude", type=float, default=_core.EVIDENCE_MAGNITUDE)
     p.add_argument("--model", default=None,
                    help="for clouds without a semantic field: 'learned' (the bundled learned "
                    "evidence head; needs --predictions) or your own callable "
@@ -606,7 +606,7 @@ def _add_write_arguments(p):
     p.add_argument("--evidence", default="onehot", choices=("onehot", "knn-vote", "file",
                                                            "learned"),
                    help="evidence of the evidence topic (default onehot, derived, no calibration)")
-    p.add_argument("-E", "--evidence-magnitude", type=float, default=20.0)
+    p.add_argument("-E", "--evidence-magnitude", type=float, default=_core.EVIDENCE_MAGNITUDE)
     p.add_argument("--learned-model", default=None)
     p.add_argument("--rate", type=float, default=10.0, help="scans per second (default 10)")
     p.add_argument("--outside-buffer", action="store_true",

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional, Sequence
 
 from ._core import ClassTable, Dataset, EvidentialOcTree, SemanticConfig, derive_evidence
-from ._core import evidence_is_derived
+from ._core import EVIDENCE_MAGNITUDE, evidence_is_derived
 
 FLT_MAX = 3.4028234663852886e38  # largest float: "unbounded" log-odds that still save as .ot
 
@@ -37,7 +37,7 @@ class MappingJob:
     resolution: float = 0.2
     config: dict = field(default_factory=dict)  # SemanticConfig fields by name
     evidence: str = "onehot"
-    magnitude: float = 20.0
+    magnitude: float = EVIDENCE_MAGNITUDE
     # Chunk maps keep unbounded occupancy log-odds and the merged map is clamped once at the end,
     # so occupancy does not depend on the chunking (OctoMap clamps after every scan instead).
     unclamped: bool = False
@@ -208,7 +208,7 @@ def parse_arguments(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     p.add_argument("--evidence", default="onehot",
                    help="'file' (evidence/ or alpha/ files), or derived from hard labels: "
                         "'onehot' (default) or 'knn-vote'")
-    p.add_argument("-E", "--evidence-magnitude", type=float, default=20.0,
+    p.add_argument("-E", "--evidence-magnitude", type=float, default=EVIDENCE_MAGNITUDE,
                    help="E of derived evidence (default 20)")
     p.add_argument("--unclamped-merge", action="store_true",
                    help="keep chunk maps' occupancy unclamped and clamp once after the merge: "

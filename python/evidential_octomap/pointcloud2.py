@@ -152,8 +152,9 @@ def all_fields(msg, points: Optional[_Points] = None) -> Dict[str, np.ndarray]:
     return out
 
 
-def decode(msg, num_classes: int, input: str = "auto", label_magnitude: float = 20.0,
-           logit_transform: str = "softmax", probability_magnitude: float = 20.0,
+def decode(msg, num_classes: int, input: str = "auto",
+           label_magnitude: float = _core.EVIDENCE_MAGNITUDE, logit_transform: str = "softmax",
+           probability_magnitude: float = _core.EVIDENCE_MAGNITUDE,
            raw_label_table=None) -> Cloud:
     """Reads points and evidence of a PointCloud2 by the node's rules (see the module's doc).
 

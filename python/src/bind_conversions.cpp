@@ -48,7 +48,7 @@ void bindConversions(nb::module_& m) {
           return evidenceFromLogits(z, c, t, magnitude, e);
         });
       },
-      nb::arg("logits"), nb::arg("transform") = "softmax", nb::arg("magnitude") = 20.0f,
+      nb::arg("logits"), nb::arg("transform") = "softmax", nb::arg("magnitude") = kEvidenceMagnitude,
       "(N, C) evidence of (N, C) logits: 'softmax' (then as evidence_from_probabilities), 'exp' "
       "or 'softplus' (EDL networks). Raises ValueError naming the first non-finite logit.");
   m.def(
@@ -58,7 +58,7 @@ void bindConversions(nb::module_& m) {
         return convertRows(
             p, [&](const float* row, float* e) { return evidenceFromProbabilities(row, c, magnitude, e); });
       },
-      nb::arg("probabilities"), nb::arg("magnitude") = 20.0f,
+      nb::arg("probabilities"), nb::arg("magnitude") = kEvidenceMagnitude,
       "(N, C) confidence-scaled evidence e_c = E p_c (C p_max - 1) / (C - 1) of (N, C) class "
       "probabilities (normalised per row). Raises ValueError naming the first bad row.");
 

@@ -23,7 +23,7 @@ int argmaxAbove(const float* values, int num_classes, float floor) {
   return best;
 }
 
-// Evidence-space Dempster (DESIGN §1, "the stable form"): L^c = sum log1p(e_hat^c / C).
+// Evidence-space Dempster (docs/design.md, "Fusion"): L^c = sum log1p(e_hat^c / C).
 class DempsterRule : public FusionRule {
  public:
   explicit DempsterRule(double evidence_cap) : cap_(evidence_cap) {}

@@ -1,4 +1,4 @@
-// The one kernel loop (DESIGN §2): every kept point adds its rule's contribution, weighted by the
+// The one kernel loop (docs/design.md): every kept point adds its rule's contribution, weighted by the
 // sparse kernel k(d, L_i), to each voxel within its support, aggregated per voxel for the scan.
 // Run per subtree of the tree update (subtree_updates.h), so rows exist only for the subtree at
 // hand and threads never share one.

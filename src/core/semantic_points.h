@@ -1,4 +1,4 @@
-// The points of a scan that give semantic evidence: the percentile threshold (DESIGN §1) and the
+// The points of a scan that give semantic evidence: the percentile threshold and the
 // down-sampling of SemanticConfig, computed in parallel with sorting instead of hash maps.
 // Private to the core.
 #pragma once

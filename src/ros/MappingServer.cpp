@@ -67,29 +67,31 @@ void warnDropped(const std::string& message) {
 MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& nh_private)
     : nh_(nh), pnh_(nh_private), tf_listener_(tf_buffer_) {
   config_ = readNodeConfig(pnh_);
-  readSemanticConfig(pnh_, config_.resolution, &semantic_config_);
+  SemanticConfig semantic;
+  readSemanticConfig(pnh_, config_.resolution, &semantic);
   classes_ = ClassTable::load(config_.classes);
   if (config_.num_classes != 0 && config_.num_classes != classes_.numClasses())
     throw std::invalid_argument("~num_classes = " + std::to_string(config_.num_classes) +
                                 " disagrees with the class table " + config_.classes + " (" +
                                 std::to_string(classes_.numClasses()) + " classes)");
   config_.num_classes = classes_.numClasses();
-  tree_ = makeTree();
+  read_options_ = cloudReadOptions();
+  tree_ = makeTree(semantic);
   if (!config_.map_file.empty()) loadStartupMap();
   if (config_.autosave_path.empty()) config_.autosave_path = defaultAutosavePath(config_.map_file);
   config_.autosave_path = absolutePath(config_.autosave_path);
   if (config_.resume_from_autosave) resumeFromAutosave();
   {
     std::ostringstream s;
-    semantic_config_.print(s);
+    tree_->config().print(s);
     ROS_INFO_STREAM("evidential_mapping_node: frame "
-                    << config_.frame_id << ", resolution " << config_.resolution
+                    << config_.frame_id << ", resolution " << tree_->getResolution()
                     << " m, C = " << config_.num_classes << " (" << classes_.dataset << ", "
                     << config_.classes << "), input " << config_.input_type << ", insertion queue "
                     << config_.insert_queue_size << "\n"
                     << s.str());
   }
-  reportSettingsProfile(pnh_, semantic_config_);
+  reportSettingsProfile(pnh_, tree_->config());
 
   outputs_ = std::make_unique<MapOutputs>(nh_, pnh_, config_, classes_,
                                           [this](const OctomapMsgsInterface::MapVisitor& visit) {
@@ -121,7 +123,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   reconfigure_server_->setConfigMin(lo);
   reconfigure_server_->setConfigMax(hi);
   MappingConfig rc;
-  toReconfigure(semantic_config_, *tree_, config_, &rc);
+  toReconfigure(tree_->config(), *tree_, config_, &rc);
   reconfigure_server_->updateConfig(rc);
   reconfigure_server_->setCallback(boost::bind(&MappingServer::reconfigure, this,
                                                boost::placeholders::_1, boost::placeholders::_2));
@@ -202,9 +204,9 @@ void MappingServer::subscribeInputs() {
   intake_spinner_->start();
 }
 
-std::unique_ptr<EvidentialOcTree> MappingServer::makeTree() {
-  auto tree =
-      std::make_unique<EvidentialOcTree>(config_.resolution, config_.num_classes, semantic_config_);
+std::unique_ptr<EvidentialOcTree> MappingServer::makeTree(const SemanticConfig& semantic) {
+  const double resolution = tree_ ? tree_->getResolution() : config_.resolution;
+  auto tree = std::make_unique<EvidentialOcTree>(resolution, config_.num_classes, semantic);
   tree->setClassNames(classes_.names);
   if (tree_) {  // keep the sensor model in use (it may have been changed at run time)
     tree->setSensorModel(tree_->sensorModel());
@@ -289,19 +291,23 @@ void MappingServer::insertionLoop() {
   }
 }
 
-void MappingServer::insertCloud(const PendingCloud& pending) {
-  const sensor_msgs::PointCloud2& cloud = *pending.cloud;
-  std::lock_guard<std::mutex> lock(mutex_);
+CloudReadOptions MappingServer::cloudReadOptions() const {
   CloudReadOptions options;
-  options.num_classes = tree_->numClasses();
+  options.num_classes = config_.num_classes;
   options.input =
       config_.use_camera ? EvidenceInput::kNone : evidenceInputFromName(config_.input_type);
   options.label_magnitude = static_cast<float>(config_.label_evidence);
   options.logit_transform = logitTransformFromName(config_.logit_transform);
   options.probability_magnitude = static_cast<float>(config_.probability_evidence);
   options.raw_label_table = config_.label_is_raw ? &classes_ : nullptr;
+  return options;
+}
+
+void MappingServer::insertCloud(const PendingCloud& pending) {
+  const sensor_msgs::PointCloud2& cloud = *pending.cloud;
+  std::lock_guard<std::mutex> lock(mutex_);
   SemanticCloud scan;
-  std::string error = fromPointCloud2(cloud, options, &scan);
+  std::string error = fromPointCloud2(cloud, read_options_, &scan);
   if (error.empty() && config_.use_camera) error = paintFromCamera(cloud, &scan);
   if (error.empty() &&
       keepHeightBand(toPose(pending.T_F_S.transform), config_.pointcloud_band, tree_->numClasses(),
@@ -496,7 +502,7 @@ std::unique_ptr<EvidentialOcTree> MappingServer::readMapFile(const std::string& 
   *occupancy_only = first_line.rfind("# Octomap OcTree binary file", 0) == 0;
   std::unique_ptr<EvidentialOcTree> tree;
   if (*occupancy_only) {
-    tree = loadBinaryOccupancy(path, config_.num_classes, semantic_config_);
+    tree = loadBinaryOccupancy(path, config_.num_classes, SemanticConfig());  // see adoptMap
     tree->setClassNames(classes_.names);
   } else {
     const uint64_t limit =
@@ -509,11 +515,14 @@ std::unique_ptr<EvidentialOcTree> MappingServer::readMapFile(const std::string& 
   return tree;
 }
 
-// A map read from a .bt has only occupancy: it takes the sensor model in use (map mutex held).
+// A map read from a .bt has only occupancy: it takes the settings and the sensor model in use
+// (map mutex held). An .ot brings its own settings and resolution, which the node then maps with.
 void MappingServer::adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupancy_only) {
-  if (occupancy_only && tree_) map->setSensorModel(tree_->sensorModel());
+  if (occupancy_only && tree_) {
+    map->setConfig(tree_->config());
+    map->setSensorModel(tree_->sensorModel());
+  }
   tree_ = std::move(map);
-  semantic_config_ = tree_->config();
 }
 
 void MappingServer::loadStartupMap() {
@@ -527,7 +536,6 @@ void MappingServer::loadStartupMap() {
   if (tree_->getResolution() != config_.resolution) {
     ROS_WARN("~map_file %s has resolution %g m; the node maps at it (not ~resolution %g m)",
              path.c_str(), tree_->getResolution(), config_.resolution);
-    config_.resolution = tree_->getResolution();
   }
   ROS_INFO("~map_file: loaded %zu leaves (%zu semantic) from %s", tree_->getNumLeafNodes(),
            tree_->numSemanticNodes(), path.c_str());
@@ -587,18 +595,20 @@ bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
   std::lock_guard<std::mutex> lock(mutex_);
   // Run-time (dynamic_reconfigure) values stay; ~rule and ~sbki_prior, which change what a
   // stored voxel means and so cannot change on a live map, are re-read here.
-  std::string rule = semantic_config_.rule;
+  SemanticConfig semantic = tree_->config();
+  std::string rule = semantic.rule;
   pnh_.param("rule", rule, rule);
-  pnh_.param("sbki_prior", semantic_config_.sbki_prior, semantic_config_.sbki_prior);
+  pnh_.param("sbki_prior", semantic.sbki_prior, semantic.sbki_prior);
   try {
     fusionRuleFromName(rule);
-    semantic_config_.rule = rule;
+    semantic.rule = rule;
   } catch (const std::exception& e) {
-    ROS_ERROR("reset: %s; keeping rule %s", e.what(), semantic_config_.rule.c_str());
+    ROS_ERROR("reset: %s; keeping rule %s", e.what(), semantic.rule.c_str());
   }
-  tree_ = makeTree();
+  tree_ = makeTree(semantic);
   ++map_changes_;
-  ROS_INFO("reset: map cleared (rule %s)", semantic_config_.rule.c_str());
+  ROS_INFO("reset: map cleared (rule %s, resolution %g m)", tree_->config().rule.c_str(),
+           tree_->getResolution());
   recordMapSize();
   outputs_->markStale();
   publishMap(true);
@@ -688,7 +698,6 @@ void MappingServer::resumeFromAutosave() {
     recordError(std::string("autosave not resumed: ") + e.what());
     return;
   }
-  config_.resolution = tree_->getResolution();
   ROS_INFO("autosave: resumed from %s, written %.1f s ago: %zu leaves (%zu semantic)",
            path.c_str(), age_s, tree_->getNumLeafNodes(), tree_->numSemanticNodes());
 }
@@ -760,21 +769,21 @@ void MappingServer::autosaveOnce() {
 // in use stay and go back to the server, so clients see what the node maps with.
 void MappingServer::reconfigure(MappingConfig& rc, uint32_t) {
   std::lock_guard<std::mutex> lock(mutex_);
-  SemanticConfig semantic = semantic_config_;
+  SemanticConfig semantic = tree_->config();
   NodeConfig node = config_;
   SensorModel model = tree_->sensorModel();
   fromReconfigure(rc, &semantic, &node, &model);
   const std::string problem = reconfigureProblem(semantic, model, tree_->getResolution());
   if (!problem.empty()) {
     ROS_ERROR("reconfigure refused: %s; the values in use stay", problem.c_str());
-    toReconfigure(semantic_config_, *tree_, config_, &rc);
+    toReconfigure(tree_->config(), *tree_, config_, &rc);
     return;
   }
   tree_->setConfig(semantic);
   tree_->setSensorModel(model);
-  semantic_config_ = semantic;
   ++map_changes_;
   config_.label_evidence = node.label_evidence;
+  read_options_.label_magnitude = static_cast<float>(node.label_evidence);
   if (node.publish_rate != config_.publish_rate) {
     config_.publish_rate = node.publish_rate;
     restartPublishTimer();

@@ -95,8 +95,11 @@ class MappingServer {
   bool query(QueryMap::Request& req, QueryMap::Response& res);
   void reconfigure(MappingConfig& config, uint32_t level);
 
-  // A fresh, empty tree from the current parameters.
-  std::unique_ptr<EvidentialOcTree> makeTree();
+  // A fresh, empty tree with these settings, at the resolution and with the sensor model of the
+  // map in use (at start-up: ~resolution and the ~sensor_model parameters).
+  std::unique_ptr<EvidentialOcTree> makeTree(const SemanticConfig& semantic);
+  // How clouds are read: from ~input_type & co., parsed once (and on reconfigure).
+  CloudReadOptions cloudReadOptions() const;
   // ~map_file at start-up (as octomap_server's map file argument): our .ot, or a .bt whose
   // occupancy the map starts from. Throws when it cannot be loaded.
   void loadStartupMap();
@@ -118,9 +121,11 @@ class MappingServer {
   void recordError(const std::string& message);
 
   ros::NodeHandle nh_, pnh_;
+  // The node's own parameters. The map's settings and resolution are read from tree_ alone
+  // (config_.resolution is only ~resolution, the size of the first map).
   NodeConfig config_;
-  SemanticConfig semantic_config_;
   ClassTable classes_;
+  CloudReadOptions read_options_;
   std::unique_ptr<EvidentialOcTree> tree_;
   std::mutex mutex_;  // map, config and outputs: insertion thread, services, timers
 

@@ -1,4 +1,4 @@
-// Camera path (DESIGN §5): LiDAR points projected into an evidence image take the evidence of
+// Camera path: LiDAR points projected into an evidence image take the evidence of
 // the pixel they land in. Pinhole + distortion through cv::projectPoints; free functions so the
 // maths is tested with synthetic images whose right answer is known.
 #pragma once

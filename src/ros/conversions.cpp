@@ -130,6 +130,212 @@ std::string findChannels(const sensor_msgs::PointCloud2& msg, const std::string&
   return "";
 }
 
+// "" when width, height, point_step, row_step and the data size describe a readable cloud.
+std::string layoutProblem(const sensor_msgs::PointCloud2& msg) {
+  if (size_t(msg.width) * msg.height == 0) return "cloud has zero points";
+  if (msg.point_step == 0) return "point_step is 0";
+  if (size_t(msg.row_step) < size_t(msg.width) * msg.point_step)
+    return "row_step " + std::to_string(msg.row_step) + " < width " + std::to_string(msg.width) +
+           " x point_step " + std::to_string(msg.point_step);
+  const size_t needed =
+      size_t(msg.row_step) * (msg.height - 1) + size_t(msg.width) * msg.point_step;
+  if (msg.data.size() < needed)
+    return "truncated data: " + std::to_string(msg.data.size()) + " bytes for " +
+           std::to_string(msg.width) + " x " + std::to_string(msg.height) + " points need " +
+           std::to_string(needed);
+  return "";
+}
+
+// The x, y, z fields (float32 or float64, inside a point).
+std::string findCoordinates(const sensor_msgs::PointCloud2& msg, FieldRef xyz[3]) {
+  const char* axes[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    const PointField* f = findField(msg, axes[a]);
+    if (!f) return std::string("missing field '") + axes[a] + "' (fields: " + fieldList(msg) + ")";
+    if (f->datatype != PointField::FLOAT32 && f->datatype != PointField::FLOAT64)
+      return std::string("field '") + axes[a] + "' must be float32 or float64, is " +
+             typeName(f->datatype);
+    std::string err = checkField(*f, msg.point_step);
+    if (!err.empty()) return err;
+    xyz[a] = {f->offset, f->datatype, typeSize(f->datatype)};
+  }
+  return "";
+}
+
+// Where a cloud's semantics are: the input kind found and its fields.
+struct SemanticFields {
+  EvidenceInput input = EvidenceInput::kNone;
+  std::vector<FieldRef> channels;  // C of them for evidence, alpha, logits, probabilities
+  FieldRef label;
+};
+
+const char* channelBase(EvidenceInput input) {
+  switch (input) {
+    case EvidenceInput::kEvidence: return "evidence";
+    case EvidenceInput::kAlpha: return "alpha";
+    case EvidenceInput::kLogits: return "logits";
+    case EvidenceInput::kProbabilities: return "probabilities";
+    default: return "";
+  }
+}
+
+// Looks for one kind of input: "" (found, `fields` filled), "absent", or what is wrong.
+std::string tryInput(const sensor_msgs::PointCloud2& msg, EvidenceInput kind, int C,
+                     SemanticFields* fields) {
+  if (kind != EvidenceInput::kLabel) {
+    std::string err = findChannels(msg, channelBase(kind), C, &fields->channels);
+    if (err.empty()) fields->input = kind;
+    return err;
+  }
+  const PointField* f = findField(msg, "label");
+  if (!f) return "absent";
+  std::string err = checkField(*f, msg.point_step);
+  if (!err.empty()) return err;
+  fields->label = {f->offset, f->datatype, typeSize(f->datatype)};
+  fields->input = EvidenceInput::kLabel;
+  return "";
+}
+
+// What to say when the field an input type asks for is not in the cloud.
+std::string missingInput(const sensor_msgs::PointCloud2& msg, EvidenceInput input, int C) {
+  const std::string fields = " (fields: " + fieldList(msg) + ")";
+  const std::string count = std::to_string(C);
+  switch (input) {
+    case EvidenceInput::kAuto:
+      return "no semantic field: expected 'evidence' (float32, count " + count +
+             "), 'evidence_0'..'evidence_" + std::to_string(C - 1) +
+             "', 'alpha', 'logits', 'probabilities' or 'label'" + fields;
+    case EvidenceInput::kEvidence:
+      return "missing field 'evidence' (float32, count " + count + ") or 'evidence_0'..'evidence_" +
+             std::to_string(C - 1) + "'" + fields;
+    case EvidenceInput::kLabel: return "missing field 'label'" + fields;
+    default: {
+      const std::string base = channelBase(input);
+      return "missing field '" + base + "' (float32, count " + count + ") or '" + base + "_0'.." +
+             fields;
+    }
+  }
+}
+
+// The semantic fields `options.input` asks for (auto: the first present of evidence, alpha,
+// logits, probabilities, label); "" or what is missing or wrong.
+std::string findSemantics(const sensor_msgs::PointCloud2& msg, EvidenceInput wanted, int C,
+                          SemanticFields* fields) {
+  if (wanted == EvidenceInput::kNone) return "";
+  std::string err = "absent";
+  if (wanted == EvidenceInput::kAuto) {
+    for (EvidenceInput kind : {EvidenceInput::kEvidence, EvidenceInput::kAlpha,
+                               EvidenceInput::kLogits, EvidenceInput::kProbabilities,
+                               EvidenceInput::kLabel}) {
+      err = tryInput(msg, kind, C, fields);
+      if (err != "absent") break;
+    }
+  } else {
+    err = tryInput(msg, wanted, C, fields);
+  }
+  return err == "absent" ? missingInput(msg, wanted, C) : err;
+}
+
+std::string sourceName(EvidenceInput input, int C, const CloudReadOptions& options) {
+  const std::string count = "[" + std::to_string(C) + "]";
+  switch (input) {
+    case EvidenceInput::kEvidence: return "evidence" + count;
+    case EvidenceInput::kAlpha: return "alpha" + count;
+    case EvidenceInput::kLogits:
+      return "logits" + count + " (" + logitTransformName(options.logit_transform) + ")";
+    case EvidenceInput::kProbabilities: return "probabilities" + count;
+    case EvidenceInput::kLabel: return "label";
+    default: return "none (occupancy only)";
+  }
+}
+
+// One point's evidence or alpha channels into `row`; "" or what is wrong.
+std::string readEvidenceChannels(const uint8_t* p, const SemanticFields& f, int C, bool swap,
+                                 size_t index, std::vector<float>* row) {
+  const bool alpha = f.input == EvidenceInput::kAlpha;
+  for (int c = 0; c < C; ++c) {
+    double value = readValue(p + f.channels[c].offset, f.channels[c].datatype, swap);
+    if (alpha) value -= 1.0;
+    if (!fitsFloat(value) || value < 0.0) {
+      std::ostringstream s;
+      s << "point " << index << ": " << (alpha ? "alpha" : "evidence") << " of class " << c
+        << " is " << (alpha ? value + 1.0 : value)
+        << (alpha ? " (alpha must be finite and >= 1, within float range)"
+                  : " (evidence must be finite and >= 0, within float range)");
+      return s.str();
+    }
+    (*row)[c] = static_cast<float>(value);
+  }
+  return "";
+}
+
+// One point's logits or probabilities, converted to evidence in `row`.
+std::string readConvertedChannels(const uint8_t* p, const SemanticFields& f, int C, bool swap,
+                                  const CloudReadOptions& options, size_t index,
+                                  std::vector<float>* raw, std::vector<float>* row) {
+  for (int c = 0; c < C; ++c)
+    (*raw)[c] = float(readValue(p + f.channels[c].offset, f.channels[c].datatype, swap));
+  const std::string bad =
+      f.input == EvidenceInput::kLogits
+          ? evidenceFromLogits(raw->data(), C, options.logit_transform,
+                               options.probability_magnitude, row->data())
+          : evidenceFromProbabilities(raw->data(), C, options.probability_magnitude, row->data());
+  return bad.empty() ? "" : "point " + std::to_string(index) + ": " + bad;
+}
+
+// One point's label (a class id, or a raw id through the table) as one-hot evidence in `row`.
+std::string readLabel(const uint8_t* p, const SemanticFields& f, int C, bool swap,
+                      const CloudReadOptions& options, size_t index, std::vector<float>* row) {
+  const double value = readValue(p + f.label.offset, f.label.datatype, swap);
+  if (!std::isfinite(value) || value != std::floor(value) || value < 0) {
+    std::ostringstream s;
+    s << "point " << index << ": label " << value << " is not a non-negative integer";
+    return s.str();
+  }
+  // Range-checked before any cast (a cast of 2^31, 4294967295 or 1e300 to int is undefined):
+  // class ids lie in [0, C), raw ids in the 32-bit range the learning map is keyed by.
+  const double limit = options.raw_label_table ? 4294967296.0 : double(C);
+  if (value >= limit) {
+    std::ostringstream s;
+    s << std::setprecision(17) << "point " << index << ": label " << value
+      << (options.raw_label_table ? " is beyond the 32-bit raw ids"
+                                  : " is outside [0, " + std::to_string(C) + ")");
+    return s.str();
+  }
+  int label = 0;
+  if (options.raw_label_table) {
+    try {
+      label = options.raw_label_table->classOfRaw(static_cast<uint32_t>(value));
+    } catch (const std::exception& e) {
+      return "point " + std::to_string(index) + ": " + e.what();
+    }
+  } else {
+    label = static_cast<int>(value);
+  }
+  if (label >= C) {
+    std::ostringstream s;
+    s << "point " << index << ": label " << label << " is outside [0, " << C << ")";
+    return s.str();
+  }
+  evidenceFromLabel(label, C, options.label_magnitude, row->data());
+  return "";
+}
+
+// One point's evidence row, from whichever fields the cloud has.
+std::string readPointEvidence(const uint8_t* p, const SemanticFields& f, int C, bool swap,
+                              const CloudReadOptions& options, size_t index,
+                              std::vector<float>* scratch, std::vector<float>* row) {
+  switch (f.input) {
+    case EvidenceInput::kEvidence:
+    case EvidenceInput::kAlpha: return readEvidenceChannels(p, f, C, swap, index, row);
+    case EvidenceInput::kLogits:
+    case EvidenceInput::kProbabilities:
+      return readConvertedChannels(p, f, C, swap, options, index, scratch, row);
+    case EvidenceInput::kLabel: return readLabel(p, f, C, swap, options, index, row);
+    default: std::fill(row->begin(), row->end(), 0.f); return "";
+  }
+}
+
 }  // namespace
 
 EvidenceInput evidenceInputFromName(const std::string& name) {
@@ -145,6 +351,7 @@ EvidenceInput evidenceInputFromName(const std::string& name) {
                               "label or none");
 }
 
+// Layout, coordinates, semantic fields, then every point (non-finite coordinates dropped).
 std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudReadOptions& options,
                             SemanticCloud* out) {
   const int C = options.num_classes;
@@ -153,109 +360,16 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
   out->evidence.clear();
   out->nonfinite_points = 0;
   out->source.clear();
-
-  // --- layout -------------------------------------------------------------------------
-  const size_t n_points = size_t(msg.width) * msg.height;
-  if (n_points == 0) return "cloud has zero points";
-  if (msg.point_step == 0) return "point_step is 0";
-  if (size_t(msg.row_step) < size_t(msg.width) * msg.point_step)
-    return "row_step " + std::to_string(msg.row_step) + " < width " + std::to_string(msg.width) +
-           " x point_step " + std::to_string(msg.point_step);
-  const size_t needed = size_t(msg.row_step) * (msg.height - 1) + size_t(msg.width) * msg.point_step;
-  if (msg.data.size() < needed)
-    return "truncated data: " + std::to_string(msg.data.size()) + " bytes for " +
-           std::to_string(msg.width) + " x " + std::to_string(msg.height) + " points need " +
-           std::to_string(needed);
-
   FieldRef xyz[3];
-  const char* axes[3] = {"x", "y", "z"};
-  for (int a = 0; a < 3; ++a) {
-    const PointField* f = findField(msg, axes[a]);
-    if (!f) return std::string("missing field '") + axes[a] + "' (fields: " + fieldList(msg) + ")";
-    if (f->datatype != PointField::FLOAT32 && f->datatype != PointField::FLOAT64)
-      return std::string("field '") + axes[a] + "' must be float32 or float64, is " +
-             typeName(f->datatype);
-    std::string err = checkField(*f, msg.point_step);
-    if (!err.empty()) return err;
-    xyz[a] = {f->offset, f->datatype, typeSize(f->datatype)};
-  }
-
-  // --- semantic channels ----------------------------------------------------------------
-  EvidenceInput input = options.input;
-  std::vector<FieldRef> channels;
-  FieldRef label_ref;
-  auto tryChannels = [&](const std::string& base, EvidenceInput kind) -> std::string {
-    std::string err = findChannels(msg, base, C, &channels);
-    if (err.empty()) input = kind;
-    return err;
-  };
-  auto tryLabel = [&]() -> std::string {
-    const PointField* f = findField(msg, "label");
-    if (!f) return "absent";
-    std::string err = checkField(*f, msg.point_step);
-    if (!err.empty()) return err;
-    label_ref = {f->offset, f->datatype, typeSize(f->datatype)};
-    input = EvidenceInput::kLabel;
-    return "";
-  };
-  std::string err;
-  switch (options.input) {
-    case EvidenceInput::kAuto:
-      err = tryChannels("evidence", EvidenceInput::kEvidence);
-      if (err == "absent") err = tryChannels("alpha", EvidenceInput::kAlpha);
-      if (err == "absent") err = tryChannels("logits", EvidenceInput::kLogits);
-      if (err == "absent") err = tryChannels("probabilities", EvidenceInput::kProbabilities);
-      if (err == "absent") err = tryLabel();
-      if (err == "absent")
-        err = "no semantic field: expected 'evidence' (float32, count " + std::to_string(C) +
-              "), 'evidence_0'..'evidence_" + std::to_string(C - 1) +
-              "', 'alpha', 'logits', 'probabilities' or 'label' (fields: " + fieldList(msg) + ")";
-      break;
-    case EvidenceInput::kEvidence:
-      err = tryChannels("evidence", EvidenceInput::kEvidence);
-      if (err == "absent")
-        err = "missing field 'evidence' (float32, count " + std::to_string(C) +
-              ") or 'evidence_0'..'evidence_" + std::to_string(C - 1) + "' (fields: " + fieldList(msg) + ")";
-      break;
-    case EvidenceInput::kAlpha:
-      err = tryChannels("alpha", EvidenceInput::kAlpha);
-      if (err == "absent")
-        err = "missing field 'alpha' (float32, count " + std::to_string(C) + ") or 'alpha_0'.. (fields: " +
-              fieldList(msg) + ")";
-      break;
-    case EvidenceInput::kLogits:
-    case EvidenceInput::kProbabilities: {
-      const std::string base = options.input == EvidenceInput::kLogits ? "logits" : "probabilities";
-      err = tryChannels(base, options.input);
-      if (err == "absent")
-        err = "missing field '" + base + "' (float32, count " + std::to_string(C) + ") or '" +
-              base + "_0'.. (fields: " + fieldList(msg) + ")";
-      break;
-    }
-    case EvidenceInput::kLabel:
-      err = tryLabel();
-      if (err == "absent") err = "missing field 'label' (fields: " + fieldList(msg) + ")";
-      break;
-    case EvidenceInput::kNone:
-      break;
-  }
+  SemanticFields fields;
+  std::string err = layoutProblem(msg);
+  if (err.empty()) err = findCoordinates(msg, xyz);
+  if (err.empty()) err = findSemantics(msg, options.input, C, &fields);
   if (!err.empty()) return err;
-  switch (input) {
-    case EvidenceInput::kEvidence: out->source = "evidence[" + std::to_string(C) + "]"; break;
-    case EvidenceInput::kAlpha: out->source = "alpha[" + std::to_string(C) + "]"; break;
-    case EvidenceInput::kLogits:
-      out->source = "logits[" + std::to_string(C) + "] (" +
-                    logitTransformName(options.logit_transform) + ")";
-      break;
-    case EvidenceInput::kProbabilities:
-      out->source = "probabilities[" + std::to_string(C) + "]";
-      break;
-    case EvidenceInput::kLabel: out->source = "label"; break;
-    default: out->source = "none (occupancy only)"; break;
-  }
+  out->source = sourceName(fields.input, C, options);
 
-  // --- points ---------------------------------------------------------------------------
   const bool swap = msg.is_bigendian != 0;  // this code assumes a little-endian host
+  const size_t n_points = size_t(msg.width) * msg.height;
   out->points_S.reserve(n_points);
   out->evidence.reserve(n_points * C);
   std::vector<float> row(C), scratch(C);
@@ -263,7 +377,6 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
     const uint8_t* row_ptr = msg.data.data() + size_t(v) * msg.row_step;
     for (uint32_t u = 0; u < msg.width; ++u) {
       const uint8_t* p = row_ptr + size_t(u) * msg.point_step;
-      const size_t index = size_t(v) * msg.width + u;
       const double x = readValue(p + xyz[0].offset, xyz[0].datatype, swap);
       const double y = readValue(p + xyz[1].offset, xyz[1].datatype, swap);
       const double z = readValue(p + xyz[2].offset, xyz[2].datatype, swap);
@@ -272,68 +385,9 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
         ++out->nonfinite_points;
         continue;
       }
-      if (input == EvidenceInput::kEvidence || input == EvidenceInput::kAlpha) {
-        for (int c = 0; c < C; ++c) {
-          double value = readValue(p + channels[c].offset, channels[c].datatype, swap);
-          if (input == EvidenceInput::kAlpha) value -= 1.0;
-          if (!fitsFloat(value) || value < 0.0) {
-            std::ostringstream s;
-            s << "point " << index << ": " << (input == EvidenceInput::kAlpha ? "alpha" : "evidence")
-              << " of class " << c << " is "
-              << (input == EvidenceInput::kAlpha ? value + 1.0 : value)
-              << (input == EvidenceInput::kAlpha ? " (alpha must be finite and >= 1, within float range)"
-                                                 : " (evidence must be finite and >= 0, within float range)");
-            return s.str();
-          }
-          row[c] = static_cast<float>(value);
-        }
-      } else if (input == EvidenceInput::kLogits || input == EvidenceInput::kProbabilities) {
-        std::vector<float>& raw = scratch;
-        for (int c = 0; c < C; ++c)
-          raw[c] = float(readValue(p + channels[c].offset, channels[c].datatype, swap));
-        const std::string bad =
-            input == EvidenceInput::kLogits
-                ? evidenceFromLogits(raw.data(), C, options.logit_transform,
-                                     options.probability_magnitude, row.data())
-                : evidenceFromProbabilities(raw.data(), C, options.probability_magnitude,
-                                            row.data());
-        if (!bad.empty()) return "point " + std::to_string(index) + ": " + bad;
-      } else if (input == EvidenceInput::kLabel) {
-        const double value = readValue(p + label_ref.offset, label_ref.datatype, swap);
-        if (!std::isfinite(value) || value != std::floor(value) || value < 0) {
-          std::ostringstream s;
-          s << "point " << index << ": label " << value << " is not a non-negative integer";
-          return s.str();
-        }
-        // Range-checked before any cast (a cast of 2^31, 4294967295 or 1e300 to int is undefined):
-        // class ids lie in [0, C), raw ids in the 32-bit range the learning map is keyed by.
-        const double limit = options.raw_label_table ? 4294967296.0 : double(C);
-        if (value >= limit) {
-          std::ostringstream s;
-          s << std::setprecision(17) << "point " << index << ": label " << value
-            << (options.raw_label_table ? " is beyond the 32-bit raw ids"
-                                        : " is outside [0, " + std::to_string(C) + ")");
-          return s.str();
-        }
-        int label = 0;
-        if (options.raw_label_table) {
-          try {
-            label = options.raw_label_table->classOfRaw(static_cast<uint32_t>(value));
-          } catch (const std::exception& e) {
-            return "point " + std::to_string(index) + ": " + e.what();
-          }
-        } else {
-          label = static_cast<int>(value);
-        }
-        if (label >= C) {
-          std::ostringstream s;
-          s << "point " << index << ": label " << label << " is outside [0, " << C << ")";
-          return s.str();
-        }
-        evidenceFromLabel(label, C, options.label_magnitude, row.data());
-      } else {
-        std::fill(row.begin(), row.end(), 0.f);
-      }
+      err = readPointEvidence(p, fields, C, swap, options, size_t(v) * msg.width + u, &scratch,
+                              &row);
+      if (!err.empty()) return err;
       out->points_S.push_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
       out->evidence.insert(out->evidence.end(), row.begin(), row.end());
     }

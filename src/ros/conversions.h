@@ -37,11 +37,11 @@ EvidenceInput evidenceInputFromName(const std::string& name);
 struct CloudReadOptions {
   int num_classes = 0;
   EvidenceInput input = EvidenceInput::kAuto;
-  float label_magnitude = 20.0f;   // evidence of the labelled class for `label` inputs
+  float label_magnitude = kEvidenceMagnitude;  // evidence of the labelled class for `label` inputs
   // `logits`: how they become evidence (subjective_logic.h); `probabilities` and softmax
   // logits: E of the confidence-scaled conversion.
   LogitTransform logit_transform = LogitTransform::kSoftmax;
-  float probability_magnitude = 20.0f;
+  float probability_magnitude = kEvidenceMagnitude;
   // Labels are raw dataset ids, mapped through this table's learning map (nullptr: class ids).
   const ClassTable* raw_label_table = nullptr;
 };

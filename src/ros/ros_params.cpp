@@ -6,6 +6,8 @@
 
 #include <stdexcept>
 
+#include "evidential_octomap/settings.h"
+
 namespace evidential_octomap {
 
 std::string defaultClassTablePath() {
@@ -90,28 +92,9 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
 
 void readSemanticConfig(const ros::NodeHandle& nh, double resolution, SemanticConfig* config) {
   SemanticConfig& c = *config;
-  nh.param("rule", c.rule, c.rule);
-  nh.param("length_scale", c.length_scale, c.length_scale);
-  nh.param("sigma0", c.sigma0, c.sigma0);
-  nh.param("beta", c.beta, c.beta);
-  nh.param("gamma", c.gamma, c.gamma);
-  nh.param("drop_percent", c.drop_percent, c.drop_percent);
-  nh.param("adaptive_length", c.adaptive_length, c.adaptive_length);
-  nh.param("uncertainty_threshold", c.uncertainty_threshold, c.uncertainty_threshold);
-  nh.param("reference_compat", c.reference_compat, c.reference_compat);
-  nh.param("sbki_prior", c.sbki_prior, c.sbki_prior);
-  nh.param("evidence_cap", c.evidence_cap, c.evidence_cap);
-  nh.param("downsampling", c.downsampling, c.downsampling);
-  nh.param("ds_multiplier", c.ds_multiplier, c.ds_multiplier);
-  nh.param("kernel_distance", c.kernel_distance, c.kernel_distance);
-  nh.param("sensor_model/max_range", c.max_range, c.max_range);
-  nh.param("kernel_creates_leaves", c.kernel_creates_leaves, c.kernel_creates_leaves);
-  nh.param("discretize", c.discretize, c.discretize);
-  nh.param("threads", c.threads, c.threads);
-  nh.param("fast_free_space", c.fast_free_space, c.fast_free_space);
-  nh.param("semantic_occupied_only", c.semantic_occupied_only, c.semantic_occupied_only);
-  nh.param("evidence_floor", c.evidence_floor, c.evidence_floor);
-  nh.param("clearing_observations", c.clearing_observations, c.clearing_observations);
+  for (const Setting& s : settingList()) {  // one ~param per setting, default the struct's
+    std::visit([&](auto member) { nh.param(s.rosName(), c.*member, c.*member); }, s.field);
+  }
   std::string problem = c.problem();
   if (problem.empty()) problem = c.supportProblem(resolution);
   if (!problem.empty()) throw std::invalid_argument("~parameters refused: " + problem);

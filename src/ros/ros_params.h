@@ -21,13 +21,13 @@ namespace evidential_octomap {
 
 struct NodeConfig {
   std::string frame_id = "map";      // map frame; clouds are transformed into it
-  double resolution = 0.2;           // leaf size [m] (DESIGN §1)
+  double resolution = 0.2;           // leaf size [m]
   std::string classes;               // class-table yaml; "" = the package's SemanticKITTI table
   int num_classes = 0;               // 0 = from the class table; otherwise must agree with it
   std::string input_type = "auto";   // auto | evidence | alpha | logits | probabilities | label | none
-  double label_evidence = 20.0;      // one-hot evidence magnitude for `label` inputs
+  double label_evidence = kEvidenceMagnitude;  // one-hot evidence magnitude for `label` inputs
   std::string logit_transform = "softmax";  // logits -> evidence: softmax | exp | softplus
-  double probability_evidence = 20.0;  // E of probabilities (and softmax logits) -> evidence
+  double probability_evidence = kEvidenceMagnitude;  // E of probabilities and softmax logits
   bool label_is_raw = false;         // labels are raw dataset ids (table's learning map)
   double publish_rate = 1.0;         // max map publishing rate [Hz]; <= 0: after every scan
   double publish_radius = -1.0;      // > 0: views only within this radius of the sensor [m]

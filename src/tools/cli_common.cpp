@@ -3,6 +3,7 @@
 
 #include "calibration_file.h"
 #include "commands.h"
+#include "evidential_octomap/settings.h"
 
 namespace evidential_octomap::tools {
 
@@ -29,72 +30,25 @@ void addDataOptions(CLI::App* cmd, std::string* data, const std::string& data_he
       ->check(CLI::ExistingFile);
 }
 
+// One CLI option per setting of settings.h, named, typed and described there.
 void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
   cmd->add_option("--resolution", *resolution, "Voxel size [m]")->capture_default_str();
-  cmd->add_option("--rule", c->rule, "Fusion rule: dempster, sbki or ebs")
-      ->check(CLI::IsMember({"dempster", "sbki", "ebs"}))
-      ->capture_default_str();
-  cmd->add_option("--length-scale", c->length_scale, "Kernel length scale l [m]")
-      ->capture_default_str();
-  cmd->add_option("--sigma0", c->sigma0, "Kernel amplitude")->capture_default_str();
-  cmd->add_option("--beta", c->beta, "Adaptive length factor beta")->capture_default_str();
-  cmd->add_option("--gamma", c->gamma, "Adaptive length decay gamma")->capture_default_str();
-  cmd->add_option("--drop-percent", c->drop_percent,
-                  "Percentage psi of the most uncertain points dropped per scan")
-      ->capture_default_str();
-  cmd->add_flag("--adaptive-length,!--no-adaptive-length", c->adaptive_length,
-                "The paper's adaptive support l*beta*e^(1-gamma u) (default off: gamma = 0, "
-                "support l*beta*e; Table II ablation)")
-      ->capture_default_str();
-  cmd->add_flag("--threshold,!--no-threshold", c->uncertainty_threshold,
-                "The paper's percentile threshold: drop the --drop-percent most uncertain "
-                "points of each scan (default off; Table II ablation)")
-      ->capture_default_str();
-  cmd->add_flag("--reference-compat", c->reference_compat,
-                "The authors' released configuration: gamma = 0 (support l*beta*e), count-cap "
-                "down-sampling and the percentile threshold");
-  cmd->add_option("--sbki-prior", c->sbki_prior, "S-BKI prior alpha0")->capture_default_str();
-  cmd->add_option("--evidence-cap", c->evidence_cap,
-                  "dempster: read opinions with the fused log-evidence capped here: -1 follows "
-                  "the evidence (docs/calibration.md), 0 no cap, > 0 a fixed cap (e.g. from "
-                  "'calibrate')")
-      ->capture_default_str();
-  cmd->add_option("--downsampling", c->downsampling,
-                  "Semantic input down-sampling: average (grid of resolution/ds_multiplier) or "
-                  "count_cap (the authors': at most ds_multiplier+1 points per 2x2x2-voxel block)")
-      ->check(CLI::IsMember({"average", "count_cap"}))
-      ->capture_default_str();
-  cmd->add_option("--ds-multiplier", c->ds_multiplier,
-                  "Down-sampling parameter (see --downsampling; <= 0: off)")
-      ->capture_default_str();
-  cmd->add_option("--kernel-distance", c->kernel_distance,
-                  "Point-to-voxel distance of the kernel: voxel (to the voxel's cube, so a point "
-                  "always reaches its own voxel) or centre")
-      ->check(CLI::IsMember({"voxel", "centre"}))
-      ->capture_default_str();
-  cmd->add_option("--max-range", c->max_range, "Max sensor range [m] (< 0: unlimited)")
-      ->capture_default_str();
-  cmd->add_option("--kernel-creates-leaves", c->kernel_creates_leaves,
-                  "Kernel updates may create leaves in unknown space (true/false)")
-      ->capture_default_str();
-  cmd->add_option("--threads", c->threads, "Threads of the semantic pass (0: OpenMP default)")
-      ->capture_default_str();
-  cmd->add_option("--fast-free-space", c->fast_free_space,
-                  "Fast free space for live use: rays stop in space this scan already cleared "
-                  "(not exact; true/false)")
-      ->capture_default_str();
-  cmd->add_option("--semantic-occupied-only", c->semantic_occupied_only,
-                  "Semantic evidence only for occupied voxels and this scan's end voxels, for "
-                  "live use: about 4x less kernel work (not exact; true/false)")
-      ->capture_default_str();
-  cmd->add_option("--clearing-observations", c->clearing_observations,
-                  "Clearings (rays passing through) after which a voxel's class evidence is "
-                  "gone: moving objects leave no ghosts (0: off; sequential mapping only)")
-      ->capture_default_str();
-  cmd->add_option("--evidence-floor", c->evidence_floor,
-                  "Point evidence below this counts as 0 (0: off; 0.01 makes learned evidence "
-                  "about as cheap as one-hot)")
-      ->capture_default_str();
+  for (const Setting& s : settingList()) {
+    std::visit(
+        [&](auto member) {
+          auto& value = c->*member;
+          CLI::Option* option = nullptr;
+          if constexpr (std::is_same_v<std::decay_t<decltype(value)>, bool>) {
+            option = s.cli_flag ? cmd->add_flag(s.cliName(), value, s.help)
+                                : cmd->add_option(s.cliName(), value, s.help);
+          } else {
+            option = cmd->add_option(s.cliName(), value, s.help);
+          }
+          if (!s.choices.empty()) option->check(CLI::IsMember(s.choices));
+          option->capture_default_str();
+        },
+        s.field);
+  }
 }
 
 void addCalibrationOption(CLI::App* cmd, double* evidence_cap) {

@@ -19,6 +19,7 @@ void addInfoCommand(CLI::App& app);      // info.cpp
 void addFeaturesCommand(CLI::App& app);  // features.cpp
 void addCalibrateCommand(CLI::App& app); // calibrate.cpp
 void addGenerateCommand(CLI::App& app);  // generate.cpp
+void addParametersCommand(CLI::App& app);  // parameters.cpp
 
 // The command line as typed (main() records it), for the READMEs of generated data.
 void setCommandLine(int argc, char** argv);

@@ -10,6 +10,7 @@
 
 #include "bootstrap_report.h"
 #include "commands.h"
+#include "compare_variants.h"
 #include "dataset.h"
 #include "pipeline.h"
 #include "report.h"
@@ -27,17 +28,7 @@ struct CompareOptions {
   size_t scans = 0;
   std::vector<std::string> sources{"onehot", "knn-vote", "confusion"};
   std::vector<std::string> protocols{"reconstruction", "held-out"};
-  std::vector<std::string> variants{"dempster",
-                                    "dempster-paper",
-                                    "dempster-no-adaptive",
-                                    "dempster-no-threshold",
-                                    "dempster-no-both",
-                                    "dempster-no-cap",
-                                    "dempster-centre",
-                                    "dempster-other-downsampling",
-                                    "reference_compat",
-                                    "sbki",
-                                    "ebs"};
+  RunPlan plan;  // the variants, and which of them each source and protocol runs
   std::string rellis_data, rellis_classes;
   bool no_rellis = false;
   NoiseModel noise;
@@ -46,130 +37,7 @@ struct CompareOptions {
   EvidenceOptions evidence;
   bool quiet = false;
   BootstrapSettings bootstrap;
-  std::string plan = "default";
-  bool explicit_selection = false;  // --sources/--variants/--protocols given: full cross product
 };
-
-// The paper's Table II rows are named relative to the paper's method (adaptive length and
-// threshold both on), whatever the defaults: dempster-no-both is the default's kernel.
-SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
-  const auto paper = [&c](bool adaptive, bool threshold) {
-    c.rule = "dempster";
-    c.adaptive_length = adaptive;
-    c.uncertainty_threshold = threshold;
-  };
-  if (v == "dempster") {
-    c.rule = "dempster";
-  } else if (v == "dempster-paper") {
-    paper(true, true);
-  } else if (v == "dempster-no-adaptive") {
-    paper(false, true);
-  } else if (v == "dempster-no-threshold") {
-    paper(true, false);
-  } else if (v == "dempster-no-both") {
-    paper(false, false);
-  } else if (v == "dempster-no-cap") {  // Dempster's product read as is
-    c.rule = "dempster";
-    c.evidence_cap = 0.0;
-  } else if (v == "dempster-centre") {  // kernel distance to voxel centres (a point can miss
-    c.rule = "dempster";                // its own voxel)
-    c.kernel_distance = "centre";
-  } else if (v == "dempster-other-downsampling") {
-    c.rule = "dempster";
-    c.downsampling = c.downsampling == "average" ? "count_cap" : "average";
-  } else if (v == "reference_compat") {  // the authors' released code: no cap either
-    c.rule = "dempster";
-    c.reference_compat = true;
-    c.evidence_cap = 0.0;
-  } else if (v == "sbki" || v == "ebs") {
-    c.rule = v;
-  } else {
-    throw std::invalid_argument("unknown variant '" + v + "'");
-  }
-  return c;
-}
-
-// Sets one SemanticConfig field by name; false when the key or value is not usable.
-bool setParameter(const std::string& key, const std::string& value, SemanticConfig* c) {
-  if (key == "semantic_occupied_only" || key == "fast_free_space") {
-    if (value != "0" && value != "1") return false;
-    (key == "fast_free_space" ? c->fast_free_space : c->semantic_occupied_only) = value == "1";
-    return true;
-  }
-  if (key == "clearing_observations") {  // the one integer field
-    try {
-      size_t used = 0;
-      c->clearing_observations = std::stoi(value, &used);
-      return used == value.size();
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  if (key == "downsampling" || key == "kernel_distance") {
-    (key == "downsampling" ? c->downsampling : c->kernel_distance) = value;
-    return !value.empty();
-  }
-  const std::pair<const char*, double*> fields[] = {{"length_scale", &c->length_scale},
-                                                    {"sigma0", &c->sigma0},
-                                                    {"beta", &c->beta},
-                                                    {"gamma", &c->gamma},
-                                                    {"drop_percent", &c->drop_percent},
-                                                    {"evidence_cap", &c->evidence_cap},
-                                                    {"ds_multiplier", &c->ds_multiplier},
-                                                    {"evidence_floor", &c->evidence_floor}};
-  for (const auto& [name, field] : fields) {
-    if (key != name) continue;
-    try {
-      size_t used = 0;
-      *field = std::stod(value, &used);
-      return used == value.size();
-    } catch (const std::exception&) {
-      return false;
-    }
-  }
-  return false;
-}
-
-// A variant is a named one, optionally followed by parameter overrides that make an ablation
-// row: "dempster:drop_percent=0:evidence_cap=2". Throws std::invalid_argument.
-SemanticConfig variantConfig(const std::string& variant, const SemanticConfig& base) {
-  std::vector<std::string> parts;
-  std::stringstream in(variant);
-  for (std::string part; std::getline(in, part, ':');) parts.push_back(part);
-  if (parts.empty()) throw std::invalid_argument("empty variant");
-  SemanticConfig c = namedVariantConfig(parts[0], base);
-  for (size_t i = 1; i < parts.size(); ++i) {
-    const size_t eq = parts[i].find('=');
-    const std::string key = parts[i].substr(0, eq);
-    const std::string value = eq == std::string::npos ? "" : parts[i].substr(eq + 1);
-    if (!setParameter(key, value, &c)) {
-      throw std::invalid_argument("variant '" + variant + "': cannot set '" + parts[i] +
-                                  "' (key=value of a numeric SemanticConfig field, "
-                                  "downsampling / kernel_distance, or fast_free_space / "
-                                  "semantic_occupied_only = 0 or 1)");
-    }
-  }
-  const std::string problem = c.problem();
-  if (!problem.empty()) throw std::invalid_argument("variant '" + variant + "': " + problem);
-  return c;
-}
-
-// Plans. default (the demo; about 10 min on 2 cores): every variant with onehot evidence (the
-// peers' setup in BENCHMARKS.md); dempster and dempster-paper for knn-vote and confusion
-// (what each source does to the paper's uncertainty mechanisms); held-out: dempster, sbki, ebs with
-// onehot. extended: also sbki and ebs with knn-vote and confusion. full: every variant x source x
-// protocol. Giving --sources/--variants/--protocols runs exactly their cross product.
-std::vector<std::string> plannedVariants(const CompareOptions& o, const std::string& protocol,
-                                         const std::string& source) {
-  if (o.plan == "full" || o.explicit_selection) return o.variants;
-  if (protocol == "held-out") {
-    return source == "onehot" ? std::vector<std::string>{"dempster", "sbki", "ebs"}
-                              : std::vector<std::string>{};
-  }
-  if (source == "onehot") return o.variants;
-  if (o.plan == "extended") return {"dempster", "dempster-paper", "sbki", "ebs"};
-  return {"dempster", "dempster-paper"};
-}
 
 struct Section {
   std::string title;
@@ -271,172 +139,214 @@ std::string ablationMarks(const SemanticConfig& config) {
          " |";
 }
 
-// Runs every variant and evidence source on one dataset/protocol; appends rows and JSON.
-void runSection(const CompareOptions& o, const std::string& dataset_label,
-                const std::string& data_path, const ClassTable& classes,
-                const std::vector<Scan>& scans, const std::string& protocol_name,
-                const std::vector<std::string>& sources, const std::string& predictions_note,
-                std::vector<Section>* sections, nlohmann::json* json,
-                nlohmann::json* bootstrap_json) {
-  const Protocol protocol = makeProtocol(protocol_name, scans.size());
-  const std::vector<Query> queries =
-      buildQueries(scans, protocol.query_scans, classes.ignore_class);
-  const int num_classes = classes.numClasses();
-  const BootstrapReport bootstrap(queries, num_classes, classes.ignore_class, o.bootstrap);
-  const nlohmann::json context = {{"dataset_label", dataset_label}, {"protocol", protocol.name}};
-  Section sec;
-  std::ostringstream title;
-  title << dataset_label << ", protocol **" << protocol.name << "**: map scans "
-        << scans[protocol.map_scans.front()].name << "–" << scans[protocol.map_scans.back()].name
-        << ", query scans " << scans[protocol.query_scans.front()].name << "–"
-        << scans[protocol.query_scans.back()].name << " (" << queries.size()
-        << " GT-labelled points, class " << classes.names[classes.ignore_class] << " excluded)";
-  sec.title = title.str();
-  if (!predictions_note.empty()) sec.notes.push_back("Predictions: " + predictions_note + ".");
-  sec.notes.push_back(bootstrap.describe() + ".");
-  std::vector<QueryOutcome> outcomes;
-  const QualityMetrics hard =
-      evaluateInput(queries, {}, num_classes, classes.ignore_class, &outcomes);
-  sec.rows.push_back("| – | input predictions (hard labels), per point | | |" +
-                     qualityCells(hard, NAN, NAN) + " – | – | – |");
-  std::vector<ScoredRow> shared_rows{
-      {"input predictions (hard labels)", bootstrap.scores(outcomes)}};
-  for (ScoredRow& r : addReferenceRows(scans, protocol, queries, classes, o.resolution,
-                                       o.base.maxSupportLength(), bootstrap, &sec)) {
-    shared_rows.push_back(std::move(r));
-  }
+// One dataset: its scans and class table, as one section's rows name them.
+struct SectionData {
+  std::string label, path;  // e.g. "semantickitti_08_first10"; the path given
+  const ClassTable* classes = nullptr;
+  const std::vector<Scan>* scans = nullptr;
+  std::vector<std::string> sources;
+  std::string predictions_note;  // synthetic predictions: how they were made
+};
 
-  for (const std::string& source_name : sources) {
-    const std::vector<std::string> variants = plannedVariants(o, protocol.name, source_name);
-    if (variants.empty()) continue;
-    EvidenceOptions ev = o.evidence;
-    ev.source = evidenceSourceFromName(source_name);
-    std::vector<std::vector<float>> evidence;
-    try {
-      evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
-    } catch (const std::exception& e) {
-      sec.notes.push_back("Evidence source " + source_name + " skipped: " + e.what() + ".");
-      continue;
-    }
-    sec.notes.push_back("Evidence `" + source_name + "`: " + describeEvidence(ev) + ".");
-    std::vector<float> query_evidence;
-    buildQueries(scans, protocol.query_scans, classes.ignore_class, &evidence, &query_evidence);
-    const QualityMetrics input =
-        evaluateInput(queries, query_evidence, num_classes, classes.ignore_class, &outcomes);
-    std::vector<ScoredRow> scored = shared_rows;
-    scored.push_back({"input " + source_name + " evidence, per point", bootstrap.scores(outcomes)});
-    sec.rows.push_back("| " + source_name + " | " + inputDescription(ev) + " | | |" +
-                       qualityCells(input, NAN, NAN) + " – | – | – |");
-    sec.detection_rows.push_back("| " + source_name + " | " + inputDescription(ev) + " | | |" +
-                                 detectionCells(input));
-    const std::vector<octomap::OcTreeKey> endpoints =
-        endpointKeys(scans, protocol.map_scans, o.resolution);
-    for (const std::string& v : variants) {
-      const SemanticConfig config = variantConfig(v, o.base);
-      MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, config, o.resolution,
-                              !o.quiet, protocol.name + " " + source_name + " " + v);
-      RunReport r;
-      r.dataset = data_path;
-      r.protocol = protocol.name;
-      for (size_t s : protocol.map_scans) r.map_scans.push_back(scans[s].name);
-      for (size_t s : protocol.query_scans) r.query_scans.push_back(scans[s].name);
-      r.variant = variantName(config);
-      r.evidence_source = source_name;
-      r.evidence_description = describeEvidence(ev);
-      r.evidence_derived = derivedFromHardLabels(ev.source);
-      r.evidence_kind = evidenceKind(ev.source);
-      r.predictions_note = predictions_note;
-      r.config = config;
-      r.resolution = o.resolution;
-      r.map = evaluateMap(*run.tree, queries, classes.ignore_class, &outcomes);
-      scored.push_back({v, bootstrap.scores(outcomes)});
-      r.input = input;
-      r.input_description = inputDescription(ev);
-      r.occupied_without_endpoint =
-          static_cast<long long>(occupiedWithoutEndpoint(*run.tree, endpoints));
-      r.ms_per_scan = run.ms_per_scan;
-      r.totals = run.total;
-      fillTreeStats(*run.tree, &r);
-      const double dropped = r.totals.points_in
-                                 ? double(r.totals.points_dropped_uncertain) /
-                                       double(r.totals.points_in - r.totals.points_skipped -
-                                              r.totals.points_beyond_range)
-                                 : 0.0;
-      const std::string lead = "| " + source_name + " | " + v + " |" + ablationMarks(config);
-      std::ostringstream row;
-      row << lead << qualityCells(r.map.quality, r.map.semantic_coverage, r.map.occupancy_coverage)
-          << " " << fixed(median(r.ms_per_scan), 0) << " | " << percent(dropped) << " | "
-          << lostClasses(r, classes) << " |";
-      sec.rows.push_back(row.str());
-      sec.detection_rows.push_back(lead + detectionCells(r.map.quality));
-      nlohmann::json j = toJson(r, classes);
-      j["dataset_label"] = dataset_label;
-      j["variant_id"] = v;
-      json->push_back(j);
-      if (!o.quiet) std::cerr << row.str() << "\n";
-    }
-    addBootstrapRows(source_name, scored, bootstrap, context, &sec, bootstrap_json);
-  }
-  sections->push_back(sec);
+// What compare writes: one section per dataset and protocol, every run and bootstrap in JSON.
+struct CompareResults {
+  std::vector<Section> sections;
+  nlohmann::json runs = nlohmann::json::array(), bootstrap = nlohmann::json::array();
+};
+
+// The dropped share of a run's points (above the percentile threshold).
+double droppedShare(const InsertStats& t) {
+  return t.points_in ? double(t.points_dropped_uncertain) /
+                           double(t.points_in - t.points_skipped - t.points_beyond_range)
+                     : 0.0;
 }
 
-void runCompare(const CompareOptions& o) {
-  nlohmann::json runs = nlohmann::json::array(), bootstrap = nlohmann::json::array();
-  std::vector<Section> sections;
+// Every variant and evidence source on one dataset and protocol: one Section of rows and JSON.
+class SectionRun {
+ public:
+  SectionRun(const CompareOptions& o, const SectionData& data, const std::string& protocol_name)
+      : o_(o),
+        data_(data),
+        classes_(*data.classes),
+        scans_(*data.scans),
+        protocol_(makeProtocol(protocol_name, scans_.size())),
+        queries_(buildQueries(scans_, protocol_.query_scans, classes_.ignore_class)),
+        bootstrap_(queries_, classes_.numClasses(), classes_.ignore_class, o.bootstrap),
+        context_({{"dataset_label", data.label}, {"protocol", protocol_.name}}) {}
 
-  const ClassTable classes = ClassTable::load(o.classes);
-  const Dataset dataset = Dataset::open(o.data, classes);
-  const std::vector<Scan> scans = loadScans(dataset, o.scans, !o.quiet);
-  std::vector<std::string> sources = o.sources;
-  CompareOptions with_model = o;  // --evidence learned: the model beside the class table
-  if (with_model.evidence.learned_model.empty()) {
-    with_model.evidence.learned_model = defaultLearnedModel(o.classes, classes);
-  }
-  const std::string label =
-      fs::path(o.data).filename().string() +
-      (fs::path(o.data).filename().empty() ? fs::path(o.data).parent_path().filename().string()
-                                           : "");
-  for (const std::string& p : o.protocols) {
-    if (p == "held-out" && scans.size() < 2) continue;
-    runSection(with_model, label, o.data, classes, scans, p, sources, "", &sections, &runs,
-               &bootstrap);
+  void run(CompareResults* out) {
+    sec_.title = title();
+    if (!data_.predictions_note.empty())
+      sec_.notes.push_back("Predictions: " + data_.predictions_note + ".");
+    sec_.notes.push_back(bootstrap_.describe() + ".");
+    addSharedRows();
+    for (const std::string& source : data_.sources) runSource(source, out);
+    out->sections.push_back(sec_);
   }
 
-  std::string rellis_note;
-  if (!o.no_rellis) {
-    std::string rdata = o.rellis_data, rclasses = o.rellis_classes;
-    if (rdata.empty()) {
-      rdata =
-          (fs::path(o.data).lexically_normal().parent_path() / "rellis3d_example_000104").string();
-      if (fs::path(o.data).filename().empty()) {
-        rdata = (fs::path(o.data).parent_path().parent_path() / "rellis3d_example_000104").string();
-      }
-    }
-    if (rclasses.empty()) {
-      rclasses = (fs::path(o.classes).parent_path() / "classes_rellis3d.yaml").string();
-    }
-    if (fs::exists(rdata) && fs::exists(rclasses)) {
-      const ClassTable rtable = ClassTable::load(rclasses);
-      const Dataset rset = Dataset::open(rdata, rtable);
-      std::vector<Scan> rscans = loadScans(rset, 0, !o.quiet);
-      useSyntheticPredictions(&rscans, rtable, o.noise);
-      std::vector<std::string> rsources;
-      for (const auto& s : o.sources)
-        if (s != "confusion" && s != "file" && s != "learned") rsources.push_back(s);
-      runSection(o,
-                 "RELLIS-3D " + fs::path(rdata).filename().string() +
-                     " (single scan, identity pose, SYNTHETIC predictions)",
-                 rdata, rtable, rscans, "reconstruction", rsources, o.noise.describe(), &sections,
-                 &runs, &bootstrap);
-      sections.back().notes.push_back(
-          "Evidence `confusion` is not run here: one scan leaves no other scan to estimate the "
-          "confusion matrix on; `learned` neither (no model is trained for this class set, "
-          "and one scan cannot be cross-fitted).");
-    } else {
-      rellis_note = "RELLIS-3D part skipped: " + rdata + " or " + rclasses + " not found.";
+ private:
+  std::string title() const {
+    std::ostringstream t;
+    t << data_.label << ", protocol **" << protocol_.name << "**: map scans "
+      << scans_[protocol_.map_scans.front()].name << "–"
+      << scans_[protocol_.map_scans.back()].name << ", query scans "
+      << scans_[protocol_.query_scans.front()].name << "–"
+      << scans_[protocol_.query_scans.back()].name << " (" << queries_.size()
+      << " GT-labelled points, class " << classes_.names[classes_.ignore_class] << " excluded)";
+    return t.str();
+  }
+
+  // The rows without evidence: the input's hard labels and the reference rows.
+  void addSharedRows() {
+    std::vector<QueryOutcome> outcomes;
+    const QualityMetrics hard =
+        evaluateInput(queries_, {}, classes_.numClasses(), classes_.ignore_class, &outcomes);
+    sec_.rows.push_back("| – | input predictions (hard labels), per point | | |" +
+                        qualityCells(hard, NAN, NAN) + " – | – | – |");
+    shared_rows_ = {{"input predictions (hard labels)", bootstrap_.scores(outcomes)}};
+    for (ScoredRow& r : addReferenceRows(scans_, protocol_, queries_, classes_, o_.resolution,
+                                         o_.base.maxSupportLength(), bootstrap_, &sec_)) {
+      shared_rows_.push_back(std::move(r));
     }
   }
 
+  void runSource(const std::string& source, CompareResults* out) {
+    const std::vector<std::string> variants = o_.plan.variantsFor(protocol_.name, source);
+    if (variants.empty()) return;
+    EvidenceOptions ev = o_.evidence;
+    ev.source = evidenceSourceFromName(source);
+    std::vector<std::vector<float>> evidence;
+    try {
+      evidence =
+          deriveEvidenceFor(scans_, protocol_.map_scans, ev, classes_, protocol_.query_scans);
+    } catch (const std::exception& e) {
+      sec_.notes.push_back("Evidence source " + source + " skipped: " + e.what() + ".");
+      return;
+    }
+    sec_.notes.push_back("Evidence `" + source + "`: " + describeEvidence(ev) + ".");
+    std::vector<float> query_evidence;
+    buildQueries(scans_, protocol_.query_scans, classes_.ignore_class, &evidence, &query_evidence);
+    std::vector<QueryOutcome> outcomes;
+    const QualityMetrics input = evaluateInput(queries_, query_evidence, classes_.numClasses(),
+                                               classes_.ignore_class, &outcomes);
+    std::vector<ScoredRow> scored = shared_rows_;
+    scored.push_back({"input " + source + " evidence, per point", bootstrap_.scores(outcomes)});
+    sec_.rows.push_back("| " + source + " | " + inputDescription(ev) + " | | |" +
+                        qualityCells(input, NAN, NAN) + " – | – | – |");
+    sec_.detection_rows.push_back("| " + source + " | " + inputDescription(ev) + " | | |" +
+                                  detectionCells(input));
+    const std::vector<octomap::OcTreeKey> endpoints =
+        endpointKeys(scans_, protocol_.map_scans, o_.resolution);
+    for (const std::string& v : variants) {
+      scored.push_back(runVariant(source, ev, evidence, input, endpoints, v, out));
+    }
+    addBootstrapRows(source, scored, bootstrap_, context_, &sec_, &out->bootstrap);
+  }
+
+  // One map: its report (JSON), its table rows, its block scores for the bootstrap.
+  ScoredRow runVariant(const std::string& source, const EvidenceOptions& ev,
+                       const std::vector<std::vector<float>>& evidence,
+                       const QualityMetrics& input,
+                       const std::vector<octomap::OcTreeKey>& endpoints, const std::string& v,
+                       CompareResults* out) {
+    const SemanticConfig config = variantConfig(v, o_.base);
+    MapRun run = runMapping(scans_, protocol_.map_scans, evidence, classes_, config,
+                            o_.resolution, !o_.quiet, protocol_.name + " " + source + " " + v);
+    std::vector<QueryOutcome> outcomes;
+    RunReport r = report(source, ev, config, run);
+    r.map = evaluateMap(*run.tree, queries_, classes_.ignore_class, &outcomes);
+    r.input = input;
+    r.occupied_without_endpoint =
+        static_cast<long long>(occupiedWithoutEndpoint(*run.tree, endpoints));
+    fillTreeStats(*run.tree, &r);
+    const std::string lead = "| " + source + " | " + v + " |" + ablationMarks(config);
+    std::ostringstream row;
+    row << lead << qualityCells(r.map.quality, r.map.semantic_coverage, r.map.occupancy_coverage)
+        << " " << fixed(median(r.ms_per_scan), 0) << " | " << percent(droppedShare(r.totals))
+        << " | " << lostClasses(r, classes_) << " |";
+    sec_.rows.push_back(row.str());
+    sec_.detection_rows.push_back(lead + detectionCells(r.map.quality));
+    nlohmann::json j = toJson(r, classes_);
+    j["dataset_label"] = data_.label;
+    j["variant_id"] = v;
+    out->runs.push_back(j);
+    if (!o_.quiet) std::cerr << row.str() << "\n";
+    return {v, bootstrap_.scores(outcomes)};
+  }
+
+  // What a run is (dataset, protocol, scans, evidence, settings) and how long it took.
+  RunReport report(const std::string& source, const EvidenceOptions& ev,
+                   const SemanticConfig& config, const MapRun& run) const {
+    RunReport r;
+    r.dataset = data_.path;
+    r.protocol = protocol_.name;
+    for (size_t s : protocol_.map_scans) r.map_scans.push_back(scans_[s].name);
+    for (size_t s : protocol_.query_scans) r.query_scans.push_back(scans_[s].name);
+    r.variant = variantName(config);
+    r.evidence_source = source;
+    r.evidence_description = describeEvidence(ev);
+    r.evidence_derived = derivedFromHardLabels(ev.source);
+    r.evidence_kind = evidenceKind(ev.source);
+    r.predictions_note = data_.predictions_note;
+    r.config = config;
+    r.resolution = o_.resolution;
+    r.input_description = inputDescription(ev);
+    r.ms_per_scan = run.ms_per_scan;
+    r.totals = run.total;
+    return r;
+  }
+
+  const CompareOptions& o_;
+  const SectionData& data_;
+  const ClassTable& classes_;
+  const std::vector<Scan>& scans_;
+  const Protocol protocol_;
+  const std::vector<Query> queries_;
+  const BootstrapReport bootstrap_;
+  const nlohmann::json context_;
+  Section sec_;
+  std::vector<ScoredRow> shared_rows_;
+};
+
+// The RELLIS-3D scan and class table: given, else guessed beside --data and --classes.
+std::pair<std::string, std::string> rellisPaths(const CompareOptions& o) {
+  std::string data = o.rellis_data, classes = o.rellis_classes;
+  if (data.empty()) {
+    const fs::path given(o.data);
+    data = (given.lexically_normal().parent_path() / "rellis3d_example_000104").string();
+    if (given.filename().empty())
+      data = (given.parent_path().parent_path() / "rellis3d_example_000104").string();
+  }
+  if (classes.empty())
+    classes = (fs::path(o.classes).parent_path() / "classes_rellis3d.yaml").string();
+  return {data, classes};
+}
+
+// The RELLIS-3D section (synthetic predictions, reconstruction only); "" or why it was skipped.
+std::string runRellis(const CompareOptions& o, CompareResults* out) {
+  const auto [data, classes_path] = rellisPaths(o);
+  if (!fs::exists(data) || !fs::exists(classes_path))
+    return "RELLIS-3D part skipped: " + data + " or " + classes_path + " not found.";
+  const ClassTable classes = ClassTable::load(classes_path);
+  const Dataset dataset = Dataset::open(data, classes);
+  std::vector<Scan> scans = loadScans(dataset, 0, !o.quiet);
+  useSyntheticPredictions(&scans, classes, o.noise);
+  SectionData section{"RELLIS-3D " + fs::path(data).filename().string() +
+                          " (single scan, identity pose, SYNTHETIC predictions)",
+                      data, &classes, &scans, {}, o.noise.describe()};
+  for (const auto& s : o.sources)
+    if (s != "confusion" && s != "file" && s != "learned") section.sources.push_back(s);
+  SectionRun(o, section, "reconstruction").run(out);
+  out->sections.back().notes.push_back(
+      "Evidence `confusion` is not run here: one scan leaves no other scan to estimate the "
+      "confusion matrix on; `learned` neither (no model is trained for this class set, "
+      "and one scan cannot be cross-fitted).");
+  return "";
+}
+
+// compare.md: what the columns mean, then every section's tables.
+std::string compareMarkdown(const CompareOptions& o, const CompareResults& results,
+                            const std::string& rellis_note) {
   std::ostringstream md;
   md << "# compare: fusion rules and the Table II ablation on the same queries\n\n"
      << "Metrics (include/evidential_octomap/metrics.h), the same queries (GT-labelled points) "
@@ -454,10 +364,10 @@ void runCompare(const CompareOptions& o) {
         "is **derived from hard labels**; `learned` is a small evidential model's, "
         "**cross-fitted** (no scan's evidence from a model that saw its labels); none is a "
         "full EDL network's. Runs: "
-     << (o.explicit_selection ? std::string("the --sources/--variants/--protocols given")
-                              : "--plan " + o.plan + " (see compare --help)")
+     << (o.plan.explicit_selection ? std::string("the --sources/--variants/--protocols given")
+                                   : "--plan " + o.plan.name + " (see compare --help)")
      << ".\n\n";
-  for (const Section& s : sections) {
+  for (const Section& s : results.sections) {
     md << "## " << s.title << "\n\n";
     for (const auto& n : s.notes) md << "- " << n << "\n";
     md << "\n" << tableHeader();
@@ -473,33 +383,41 @@ void runCompare(const CompareOptions& o) {
     md << "\n";
   }
   if (!rellis_note.empty()) md << rellis_note << "\n";
-
-  makeDirectories(o.out);
-  writeText(o.out + "/compare.md", md.str());
-  nlohmann::json all;
-  all["runs"] = runs;
-  all["bootstrap"] = bootstrap;
-  writeText(o.out + "/compare.json", all.dump(2) + "\n");
-  std::cout << md.str() << "wrote " << o.out << "/{compare.md,compare.json}\n";
+  return md.str();
 }
 
-}  // namespace
+void runCompare(const CompareOptions& o) {
+  CompareResults results;
+  const ClassTable classes = ClassTable::load(o.classes);
+  const Dataset dataset = Dataset::open(o.data, classes);
+  const std::vector<Scan> scans = loadScans(dataset, o.scans, !o.quiet);
+  CompareOptions with_model = o;  // --evidence learned: the model beside the class table
+  if (with_model.evidence.learned_model.empty()) {
+    with_model.evidence.learned_model = defaultLearnedModel(o.classes, classes);
+  }
+  const fs::path given(o.data);
+  const SectionData main_data{
+      given.filename().string() +
+          (given.filename().empty() ? given.parent_path().filename().string() : ""),
+      o.data, &classes, &scans, o.sources, ""};
+  for (const std::string& p : o.protocols) {
+    if (p == "held-out" && scans.size() < 2) continue;
+    SectionRun(with_model, main_data, p).run(&results);
+  }
+  const std::string rellis_note = o.no_rellis ? "" : runRellis(o, &results);
 
-void addCompareCommand(CLI::App& app) {
-  auto o = std::make_shared<CompareOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "compare",
-      "Run dempster, its Table II ablations (w/o adaptive length, w/o threshold, w/o both), "
-      "reference_compat, sbki and ebs on the same data, evidence and queries; print one "
-      "markdown table per dataset/protocol and write compare.md + compare.json. Also runs the "
-      "RELLIS-3D scan with synthetic noisy predictions. Each table has two reference rows "
-      "without a kernel (the voxel majority of the mapped points' predictions, and of their GT) "
-      "and a paired spatial-block bootstrap of every row's mIoU(all) and Brier difference to "
-      "default dempster");
-  addDataOptions(cmd, &o->data, "SemanticKITTI-layout directory", &o->classes);
-  cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
-  cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
-      ->capture_default_str();
+  const std::string md = compareMarkdown(o, results, rellis_note);
+  makeDirectories(o.out);
+  writeText(o.out + "/compare.md", md);
+  nlohmann::json all;
+  all["runs"] = results.runs;
+  all["bootstrap"] = results.bootstrap;
+  writeText(o.out + "/compare.json", all.dump(2) + "\n");
+  std::cout << md << "wrote " << o.out << "/{compare.md,compare.json}\n";
+}
+
+// --sources, --protocols, --variants: which runs (their cross product when given).
+void addSelectionOptions(CLI::App* cmd, CompareOptions* o) {
   cmd->add_option("--sources", o->sources,
                   "Evidence sources (file, onehot, knn-vote, confusion, learned)")
       ->delimiter(',')
@@ -509,7 +427,7 @@ void addCompareCommand(CLI::App& app) {
       ->delimiter(',')
       ->check(CLI::IsMember({"reconstruction", "held-out"}))
       ->capture_default_str();
-  cmd->add_option("--variants", o->variants,
+  cmd->add_option("--variants", o->plan.variants,
                   "dempster (the defaults), dempster-paper (adaptive length and threshold on), "
                   "dempster-no-adaptive, dempster-no-threshold, dempster-no-both (the paper's "
                   "method without them), "
@@ -528,6 +446,10 @@ void addCompareCommand(CLI::App& app) {
           },
           "VARIANT[:key=value...]"))
       ->capture_default_str();
+}
+
+// The RELLIS-3D part: where its scan and class table are, and its synthetic predictions.
+void addRellisOptions(CLI::App* cmd, CompareOptions* o) {
   cmd->add_option("--rellis-data", o->rellis_data,
                   "RELLIS-3D scan directory (default: rellis3d_example_000104 beside --data)");
   cmd->add_option("--rellis-classes", o->rellis_classes,
@@ -538,6 +460,10 @@ void addCompareCommand(CLI::App& app) {
   cmd->add_option("--noise-region-rate", o->noise.region_rate, "Synthetic region-flip rate")
       ->capture_default_str();
   cmd->add_option("--noise-seed", o->noise.seed, "Synthetic noise seed")->capture_default_str();
+}
+
+// What every run shares: resolution, insert settings, evidence derivation.
+void addRunOptions(CLI::App* cmd, CompareOptions* o) {
   cmd->add_option("--resolution", o->resolution, "Voxel size [m]")->capture_default_str();
   cmd->add_option("--max-range", o->base.max_range, "Max sensor range [m] (< 0: unlimited)")
       ->capture_default_str();
@@ -558,7 +484,11 @@ void addCompareCommand(CLI::App& app) {
                   "<dataset>.model)");
   cmd->add_flag("!--no-calibration", o->evidence.calibrate,
                 "Derived evidence as is (no rescaling of u to the error rate of such points)");
-  cmd->add_option("--plan", o->plan,
+}
+
+// The plan, the paired bootstrap and the output.
+void addPlanOptions(CLI::App* cmd, CompareOptions* o) {
+  cmd->add_option("--plan", o->plan.name,
                   "default: every variant with onehot, dempster and dempster-paper for "
                   "knn-vote and confusion, held-out dempster/sbki/ebs with onehot (~10 min); "
                   "extended: also sbki and ebs for knn-vote and confusion; full: every variant x "
@@ -576,8 +506,31 @@ void addCompareCommand(CLI::App& app) {
   cmd->add_option("--bootstrap-seed", o->bootstrap.seed, "Seed of the bootstrap draws")
       ->capture_default_str();
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bars or per-run lines on stderr");
+}
+
+}  // namespace
+
+void addCompareCommand(CLI::App& app) {
+  auto o = std::make_shared<CompareOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "compare",
+      "Run dempster, its Table II ablations (w/o adaptive length, w/o threshold, w/o both), "
+      "reference_compat, sbki and ebs on the same data, evidence and queries; print one "
+      "markdown table per dataset/protocol and write compare.md + compare.json. Also runs the "
+      "RELLIS-3D scan with synthetic noisy predictions. Each table has two reference rows "
+      "without a kernel (the voxel majority of the mapped points' predictions, and of their GT) "
+      "and a paired spatial-block bootstrap of every row's mIoU(all) and Brier difference to "
+      "default dempster");
+  addDataOptions(cmd, &o->data, "SemanticKITTI-layout directory", &o->classes);
+  cmd->add_option("--out", o->out, "Output directory")->capture_default_str();
+  cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
+      ->capture_default_str();
+  addSelectionOptions(cmd, o.get());
+  addRellisOptions(cmd, o.get());
+  addRunOptions(cmd, o.get());
+  addPlanOptions(cmd, o.get());
   cmd->callback([o, cmd]() {
-    o->explicit_selection =
+    o->plan.explicit_selection =
         cmd->count("--sources") + cmd->count("--variants") + cmd->count("--protocols") > 0;
     runCompare(*o);
   });

@@ -207,90 +207,124 @@ std::vector<int> classesOfLabels(const std::vector<uint32_t>& raw, const ClassTa
 
 // --- Dataset ----------------------------------------------------------------------------------
 
-Dataset Dataset::open(const std::string& path, const ClassTable& classes,
-                      const InputConversion& conversion) {
-  Dataset d;
-  d.path_ = path;
-  d.conversion_ = conversion;
-  d.classes_ = &classes;
-  const fs::path root(path);
-  if (!fs::exists(root)) throw std::runtime_error(path + ": no such file or directory");
+namespace {
 
-  const fs::path velodyne = root / "velodyne";
-  if (fs::is_directory(velodyne)) {
-    d.layout_ = Layout::kSemanticKitti;
-    d.stems_ = sortedStems(velodyne, ".bin");
-    if (d.stems_.empty()) throw std::runtime_error(velodyne.string() + ": no .bin scans");
-    const fs::path labels = root / "labels", predictions = root / "predictions";
-    d.has_labels_ = fs::is_directory(labels);
-    d.has_predictions_ = fs::is_directory(predictions);
-    for (const char* dir : {"evidence", "alpha", "logits", "probabilities"}) {
-      if (fs::is_directory(root / dir)) {
-        d.evidence_dir_ = (root / dir).string();
-        d.evidence_kind_ = dir;
-        break;
-      }
+// What Dataset::open finds on disk, one entry per scan.
+struct ScanFiles {
+  Dataset::Layout layout = Dataset::Layout::kSemanticKitti;
+  std::vector<std::string> stems, bins, labels, predictions, evidence;
+  std::vector<Eigen::Matrix4d> poses_W_S;
+  bool has_labels = false, has_predictions = false;
+  std::string evidence_dir, evidence_kind;
+};
+
+// The first of evidence/, alpha/, logits/, probabilities/ under root.
+void findEvidenceDir(const fs::path& root, ScanFiles* f) {
+  for (const char* dir : {"evidence", "alpha", "logits", "probabilities"}) {
+    if (fs::is_directory(root / dir)) {
+      f->evidence_dir = (root / dir).string();
+      f->evidence_kind = dir;
+      return;
     }
-    const auto P = readKittiPoses((root / "poses.txt").string());
-    const Eigen::Matrix4d Tr = readKittiCalibTr((root / "calib.txt").string());
-    for (const std::string& stem : d.stems_) {
-      d.bin_files_.push_back((velodyne / (stem + ".bin")).string());
-      d.label_files_.push_back(d.has_labels_ ? (labels / (stem + ".label")).string() : "");
-      d.prediction_files_.push_back(
-          d.has_predictions_ ? (predictions / (stem + ".label")).string() : "");
-      if (d.hasEvidence()) {
-        const std::string f = findMatrixFile(d.evidence_dir_, stem);
-        if (f.empty()) {
-          throw std::runtime_error(d.evidence_dir_ + ": no " + stem + ".bin or " + stem + ".npy");
-        }
-        d.evidence_files_.push_back(f);
-      }
-      size_t index = 0;
-      try {
-        index = std::stoul(stem);
-      } catch (const std::exception&) {
-        throw std::runtime_error(d.bin_files_.back() +
-                                 ": scan name is not a number, cannot pick its line in poses.txt");
-      }
-      if (index >= P.size()) {
-        throw std::runtime_error((root / "poses.txt").string() + ": no pose for scan " + stem +
-                                 " (" + std::to_string(P.size()) + " poses)");
-      }
-      d.poses_W_S_.push_back(velodynePose(P[index], Tr));
-    }
-    return d;
   }
+}
 
-  // Single pose-less scan: the .bin itself, or a directory holding exactly the scan files.
-  d.layout_ = Layout::kSingleScan;
-  fs::path bin;
+// Scan `stem`'s line in poses.txt (its number).
+size_t poseIndex(const std::string& stem, const std::string& bin, size_t poses,
+                 const fs::path& poses_path) {
+  size_t index = 0;
+  try {
+    index = std::stoul(stem);
+  } catch (const std::exception&) {
+    throw std::runtime_error(bin +
+                             ": scan name is not a number, cannot pick its line in poses.txt");
+  }
+  if (index >= poses) {
+    throw std::runtime_error(poses_path.string() + ": no pose for scan " + stem + " (" +
+                             std::to_string(poses) + " poses)");
+  }
+  return index;
+}
+
+// velodyne/*.bin with labels/, predictions/, an evidence directory, poses.txt and calib.txt.
+ScanFiles semanticKittiFiles(const fs::path& root) {
+  ScanFiles f;
+  const fs::path velodyne = root / "velodyne", labels = root / "labels",
+                 predictions = root / "predictions", poses_path = root / "poses.txt";
+  f.stems = sortedStems(velodyne, ".bin");
+  if (f.stems.empty()) throw std::runtime_error(velodyne.string() + ": no .bin scans");
+  f.has_labels = fs::is_directory(labels);
+  f.has_predictions = fs::is_directory(predictions);
+  findEvidenceDir(root, &f);
+  const auto P = readKittiPoses(poses_path.string());
+  const Eigen::Matrix4d Tr = readKittiCalibTr((root / "calib.txt").string());
+  for (const std::string& stem : f.stems) {
+    f.bins.push_back((velodyne / (stem + ".bin")).string());
+    f.labels.push_back(f.has_labels ? (labels / (stem + ".label")).string() : "");
+    f.predictions.push_back(f.has_predictions ? (predictions / (stem + ".label")).string() : "");
+    if (!f.evidence_dir.empty()) {
+      const std::string file = findMatrixFile(f.evidence_dir, stem);
+      if (file.empty())
+        throw std::runtime_error(f.evidence_dir + ": no " + stem + ".bin or " + stem + ".npy");
+      f.evidence.push_back(file);
+    }
+    const size_t index = poseIndex(stem, f.bins.back(), P.size(), poses_path);
+    f.poses_W_S.push_back(velodynePose(P[index], Tr));
+  }
+  return f;
+}
+
+// A single pose-less scan: the .bin itself, or a directory holding exactly the scan files, each
+// with its .label beside it when there is one.
+ScanFiles singleScanFiles(const fs::path& root, const std::string& path) {
+  ScanFiles f;
+  f.layout = Dataset::Layout::kSingleScan;
   if (fs::is_regular_file(root)) {
-    bin = root;
+    f.stems.push_back(root.stem().string());
+    f.bins.push_back(root.string());
   } else {
-    const auto stems = sortedStems(root, ".bin");
-    if (stems.empty()) {
+    f.stems = sortedStems(root, ".bin");
+    if (f.stems.empty()) {
       throw std::runtime_error(path +
                                ": neither a SemanticKITTI layout (velodyne/) nor a directory "
                                "holding a .bin scan");
     }
-    for (const std::string& stem : stems) {
-      const fs::path b = root / (stem + ".bin");
-      d.stems_.push_back(stem);
-      d.bin_files_.push_back(b.string());
-    }
+    for (const std::string& stem : f.stems) f.bins.push_back((root / (stem + ".bin")).string());
   }
-  if (!bin.empty()) {
-    d.stems_.push_back(bin.stem().string());
-    d.bin_files_.push_back(bin.string());
+  f.has_labels = true;
+  for (const std::string& b : f.bins) {
+    const fs::path l = fs::path(b).replace_extension(".label");
+    if (!fs::is_regular_file(l)) f.has_labels = false;
+    f.labels.push_back(l.string());
+    f.predictions.push_back("");
+    f.poses_W_S.push_back(Eigen::Matrix4d::Identity());
   }
-  d.has_labels_ = true;
-  for (const std::string& b : d.bin_files_) {
-    fs::path l = fs::path(b).replace_extension(".label");
-    if (!fs::is_regular_file(l)) d.has_labels_ = false;
-    d.label_files_.push_back(l.string());
-    d.prediction_files_.push_back("");
-    d.poses_W_S_.push_back(Eigen::Matrix4d::Identity());
-  }
+  return f;
+}
+
+}  // namespace
+
+Dataset Dataset::open(const std::string& path, const ClassTable& classes,
+                      const InputConversion& conversion) {
+  const fs::path root(path);
+  if (!fs::exists(root)) throw std::runtime_error(path + ": no such file or directory");
+  ScanFiles f = fs::is_directory(root / "velodyne") ? semanticKittiFiles(root)
+                                                     : singleScanFiles(root, path);
+  Dataset d;
+  d.path_ = path;
+  d.conversion_ = conversion;
+  d.classes_ = &classes;
+  d.layout_ = f.layout;
+  d.stems_ = std::move(f.stems);
+  d.bin_files_ = std::move(f.bins);
+  d.label_files_ = std::move(f.labels);
+  d.prediction_files_ = std::move(f.predictions);
+  d.evidence_files_ = std::move(f.evidence);
+  d.poses_W_S_ = std::move(f.poses_W_S);
+  d.has_labels_ = f.has_labels;
+  d.has_predictions_ = f.has_predictions;
+  d.evidence_dir_ = std::move(f.evidence_dir);
+  d.evidence_kind_ = std::move(f.evidence_kind);
   return d;
 }
 

@@ -48,7 +48,7 @@ struct Scan {
 // How logits/ and probabilities/ files become evidence.
 struct InputConversion {
   LogitTransform logit_transform = LogitTransform::kSoftmax;
-  float probability_magnitude = 20.0f;  // E of the confidence-scaled conversion
+  float probability_magnitude = kEvidenceMagnitude;  // E of the confidence-scaled conversion
 };
 
 class Dataset {

@@ -1,5 +1,5 @@
 // `evidential_octomap eval --map map.ot --data DIR`: metrics of any saved map on a dataset's
-// GT-labelled points (DESIGN §6), beside the input predictions' per-point metrics.
+// GT-labelled points (metrics.h), beside the input predictions' per-point metrics.
 #include <iostream>
 #include <memory>
 

@@ -28,7 +28,7 @@ enum class EvidenceSource { kFile, kOneHot, kKnnVote, kConfusion, kLearned };
 
 struct EvidenceOptions {
   EvidenceSource source = EvidenceSource::kOneHot;
-  float magnitude = 20.0f;   // E (the scale before calibration)
+  float magnitude = kEvidenceMagnitude;  // E (the scale before calibration)
   int knn_k = 8;
   double knn_radius = 0.5;   // [m]
   std::string learned_model;  // model file of kLearned ("": defaultLearnedModel)

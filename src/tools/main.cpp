@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   t::addMergeCommand(app);
   t::addInfoCommand(app);
   t::addFeaturesCommand(app);
+  t::addParametersCommand(app);
   t::addCalibrateCommand(app);
   t::addGenerateCommand(app);
   t::setCommandLine(argc, argv);

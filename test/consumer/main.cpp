@@ -1,8 +1,6 @@
 // Consumer of the installed library: insert a tiny scan, write an .ot, read it back through
 // OctoMap's generic reader and check that the tree type survives. Exit code 0 = success.
-#include <evidential_octomap/evidential_octree.h>
-#include <octomap/AbstractOcTree.h>
-#include <octomap/octomap.h>
+#include <evidential_octomap/evidential_octomap.h>  // the whole map library, and OctoMap
 
 #include <cstdio>
 #include <iostream>

@@ -1,4 +1,4 @@
-// Crash-safe saves (issue 8): kill -9 during saveMap leaves the old file or the new one, never a
+// Crash-safe saves: kill -9 during saveMap leaves the old file or the new one, never a
 // torn one; an unwritable path or a full disk gives a clear std::runtime_error, leaves the file
 // that was there intact and the map in memory untouched; saveMap -> loadMap is exact.
 #include <fcntl.h>
@@ -318,7 +318,7 @@ TEST(CrashSafeSave, FullDiskGivesClearErrorAndKeepsOldFile) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Concurrent writers (issue 16 item 9): two threads saving one path tore 10 of 10 files when they
+// Concurrent writers: two threads saving one path tore 10 of 10 files when they
 // shared one temporary name.
 
 TEST(ConcurrentSave, ThreadsSavingOnePathNeverTearIt) {
@@ -431,7 +431,7 @@ TEST(AbandonedTemporaries, AKilledWritersAreRemovedALiveWritersAreNot) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// saveMap -> loadMap must be exact (DESIGN §4: bit-exact round trip).
+// saveMap -> loadMap must be exact (a bit-exact round trip).
 
 TEST(SaveLoad, RoundTripIsExactForAnyResolution) {
   TempDir dir;

@@ -1,4 +1,4 @@
-// Long-run numerics (issue 8): many small synthetic scans into one tree, with random evidence
+// Long-run numerics: many small synthetic scans into one tree, with random evidence
 // that includes zeros and huge values. Afterwards (and along the way) every voxel reads out
 // finite, with |sum(b) + u - 1| <= 1e-5, and memory stays bounded.
 //   test_soak [--scans N] [--points P] [--classes C] [gtest flags]

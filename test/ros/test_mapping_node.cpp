@@ -27,6 +27,7 @@
 #include "evidential_octomap/QueryMap.h"
 #include "evidential_octomap/SaveMap.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/io.h"
 #include "node_test_utils.h"
 
 using sensor_msgs::PointField;
@@ -306,6 +307,43 @@ TEST_F(MappingNodeTest, LoadMapRestoresASavedMapAndRefusesBadFiles) {
   EXPECT_EQ(query({gp(5.05, 0.0, 0.75)}).labels[0], kBuilding);
   std::remove(path.c_str());
   std::remove(junk.c_str());
+}
+
+// The node maps at the resolution of the map it holds: a map loaded through ~load_map keeps its
+// resolution through ~reset (the node must not fall back to ~resolution).
+TEST_F(MappingNodeTest, ResetAfterLoadMapKeepsTheLoadedMapsResolution) {
+  const std::string path =
+      "/tmp/evidential_octomap_rostest_fine_" + std::to_string(getpid()) + ".ot";
+  const std::string saved = path + ".after_reset.ot";
+  {
+    eo::EvidentialOcTree fine(0.1, kC);  // the node's ~resolution is 0.2
+    fine.updateNode(octomap::point3d(1.f, 1.f, 1.f), true);
+    eo::saveMap(fine, path);
+  }
+  eo::LoadMap load;
+  load.request.path = path;
+  ASSERT_TRUE(ros::service::call(kNode + "/load_map", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  callReset();
+  eo::SaveMap save;
+  save.request.path = saved;
+  ASSERT_TRUE(ros::service::call(kNode + "/save_map", save));
+  ASSERT_TRUE(save.response.success) << save.response.message;
+  std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(saved));
+  ASSERT_NE(read, nullptr);
+  EXPECT_DOUBLE_EQ(read->getResolution(), 0.1);
+  EXPECT_EQ(read->size(), 0u);  // reset emptied it
+  // Back to the node's ~resolution for the tests that follow (one node serves them all).
+  {
+    eo::EvidentialOcTree usual(0.2, kC);
+    usual.updateNode(octomap::point3d(1.f, 1.f, 1.f), true);
+    eo::saveMap(usual, path);
+  }
+  ASSERT_TRUE(ros::service::call(kNode + "/load_map", load));
+  ASSERT_TRUE(load.response.success) << load.response.message;
+  callReset();
+  std::remove(path.c_str());
+  std::remove(saved.c_str());
 }
 
 TEST_F(MappingNodeTest, EvidentialMapMessageHoldsTheSerialisedTree) {

@@ -1,4 +1,4 @@
-// rostest (issue 16): requests and settings that used to hang, kill or silently damage the real
+// rostest: requests and settings that used to hang, kill or silently damage the real
 // node are refused with a clear answer, and the node goes on mapping and answering.
 //  - ~clear_bbx with NaN or inverted boxes (a NaN max cleared the whole map);
 //  - labels >= 2^31 (cast to int, mapped as occupancy-only points without a word);

@@ -71,7 +71,7 @@ Eigen::Matrix4d parse3x4(const std::string& text) {
   return T;
 }
 
-// The metrics of DESIGN §6 recomputed from scratch for scans 000000 and 000001: the map's
+// The metrics of metrics.h recomputed from scratch for scans 000000 and 000001: the map's
 // answer at a query is its voxel's label when the voxel holds evidence (dempster payload L read
 // with sum L capped at evidence_cap: L' = L min(1, cap / sum L), p^c = (e^{L'^c} - 1 + 1/C) u
 // with u = 1 / (sum e^L' - C + 1)), else no label and uniform p.
@@ -277,7 +277,7 @@ TEST_F(CliEndToEnd, ExportAndMergeWriteReadableMaps) {
   EXPECT_NE(r.output.find("EvidentialOcTree"), std::string::npos);
 }
 
-// kill -9 during `export --color-octree` (issue 16 item 9: 41 of 50 kills destroyed the previous
+// kill -9 during `export --color-octree` (before the fix 41 of 50 kills destroyed the previous
 // file when the export wrote it in place). The previous export must stay whole.
 TEST_F(CliEndToEnd, ExportKilledAtAnyMomentLeavesTheOldFileWhole) {
   ASSERT_EQ(map_result_.status, 0) << map_result_.output;

@@ -1,0 +1,16 @@
+// Everything a user of the map library needs, in one include (as octomap/octomap.h is for
+// OctoMap): the tree and its settings, the fusion rules' read-out, files, class tables and the
+// evidence conversions. Evaluation and evidence-model headers (metrics.h, paired_bootstrap.h,
+// learned_evidence.h, point_features.h) are for the tools and are included on their own.
+#pragma once
+
+#include <octomap/octomap.h>
+
+#include "evidential_octomap/class_table.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/fusion_rule.h"
+#include "evidential_octomap/io.h"
+#include "evidential_octomap/semantic_config.h"
+#include "evidential_octomap/sensor_model.h"
+#include "evidential_octomap/settings.h"
+#include "evidential_octomap/subjective_logic.h"
