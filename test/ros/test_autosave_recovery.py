@@ -268,14 +268,17 @@ class AutosaveRecoveryTest(unittest.TestCase):
             self.assertTrue(node.save(saved).success)
             previous = {p: open(p, "rb").read() for p in (saved, autosave)}
             # Nearly full: a filler leaves 2 KiB; the map (> 2 KiB with its header) cannot fit.
+            # An autosave that fails while the filler grows removes its temporary and frees that
+            # space again, so the filler tops up after two autosave periods.
             filler = os.path.join(mount_dir, "filler")
-            with open(filler, "wb", buffering=0) as f:
-                try:
-                    while True:
-                        f.write(b"x" * 4096)
-                        f.flush()
-                except OSError:
-                    pass
+            with open(filler, "ab", buffering=0) as f:
+                for _ in range(2):
+                    try:
+                        while True:
+                            f.write(b"x" * 4096)
+                    except OSError:
+                        pass
+                    time.sleep(2.5 * 0.5)
             os.truncate(filler, os.path.getsize(filler) - 2048)
             for case, reason in (("full", "No space left on device"),
                                  ("read-only", "Read-only file system")):
@@ -296,7 +299,12 @@ class AutosaveRecoveryTest(unittest.TestCase):
                 status = node.wait_status(lambda s: s.clouds_inserted >= inserted_before + 20 and
                                           s.autosaves_failed > failed_before and
                                           reason in s.last_error)
-                self.assertIsNotNone(status, "%s: no failed autosave or mapping stopped" % case)
+                last = node.status
+                self.assertIsNotNone(status, "%s: no failed autosave or mapping stopped (inserted "
+                                     "%s of %d, autosaves failed %s of > %d, last error %r)" % (
+                                         case, last and last.clouds_inserted, inserted_before + 20,
+                                         last and last.autosaves_failed, failed_before,
+                                         last and last.last_error))
                 self.assertIn(reason, status.last_error)
                 for path, data in previous.items():
                     self.assertEqual(open(path, "rb").read(), data, "%s: %s changed" % (case, path))
