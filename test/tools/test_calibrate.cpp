@@ -5,8 +5,6 @@
 // default stays within a few percent of the fitted cap's Brier score at both evidence scales.
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <fstream>
 #include <regex>
 #include <string>
@@ -19,22 +17,6 @@ using namespace tools_test;
 
 namespace {
 
-struct CliRun {
-  int status = 0;
-  std::string output;
-};
-
-CliRun cli(const std::string& args) {
-  const std::string cmd = std::string(EVIDENTIAL_TEST_CLI) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  CliRun r;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
-  r.status = WEXITSTATUS(pclose(pipe));
-  return r;
-}
-
 double brierOf(const std::string& metrics_json) {
   std::ifstream in(metrics_json);
   return nlohmann::json::parse(in)["map"]["brier"].get<double>();
@@ -46,7 +28,7 @@ class Calibrate : public ::testing::Test {
   static std::string dataset(const std::string& name, const std::string& network_args) {
     const std::string dir = dir_ + "/" + name;
     if (!std::filesystem::exists(dir + "/README.md")) {
-      const CliRun r = cli("generate --sensor os1-32 --columns 256 --scans 4 -q " + network_args +
+      const CliResult r = runCli("generate --sensor os1-32 --columns 256 --scans 4 -q " + network_args +
                         " --out " + dir);
       EXPECT_EQ(r.status, 0) << r.output;
     }
@@ -60,7 +42,7 @@ class Calibrate : public ::testing::Test {
     double cap = 0, brier = 0, adaptive_brier = 0;
   };
   static Fit calibrate(const std::string& dir) {
-    const CliRun r = cli("calibrate" + data(dir) + "-q --out " + dir + "/calibration.yaml");
+    const CliResult r = runCli("calibrate" + data(dir) + "-q --out " + dir + "/calibration.yaml");
     EXPECT_EQ(r.status, 0) << r.output;
     std::smatch m;
     const std::regex line("evidence cap ([0-9.]+): Brier ([0-9.]+) \\(the adaptive cap [0-9.]+ "
@@ -70,7 +52,7 @@ class Calibrate : public ::testing::Test {
   }
   static double evalBrier(const std::string& dir, const std::string& map, const std::string& cap) {
     const std::string out = dir + "/eval_" + cap;
-    const CliRun r = cli("eval --map " + map + data(dir) + "--evidence-cap " + cap + " --out " + out);
+    const CliResult r = runCli("eval --map " + map + data(dir) + "--evidence-cap " + cap + " --out " + out);
     EXPECT_EQ(r.status, 0) << r.output;
     return brierOf(out + "/metrics.json");
   }
@@ -85,7 +67,7 @@ const char* kUnderconfidentX03 = "--scene farm --network underconfident --eviden
 TEST_F(Calibrate, FitsTheCapOfLowestBrierScore) {
   const std::string dir = dataset("x5", kOverconfidentX5);
   const Fit fit = calibrate(dir);
-  ASSERT_TRUE(cli("map" + data(dir) + "--evidence-cap 0 -q --out " + dir + "/uncapped").status ==
+  ASSERT_TRUE(runCli("map" + data(dir) + "--evidence-cap 0 -q --out " + dir + "/uncapped").status ==
               0);
   const std::string map = dir + "/uncapped/map.ot";
   double best_on_grid = 1e9;
@@ -100,10 +82,10 @@ TEST_F(Calibrate, MapAndEvalReadTheFileItWrites) {
   const std::string dir = dataset("x5", kOverconfidentX5);
   const Fit fit = calibrate(dir);
   const std::string file = dir + "/calibration.yaml";
-  const CliRun mapped = cli("map" + data(dir) + "--calibration " + file + " -q --out " + dir + "/cal");
+  const CliResult mapped = runCli("map" + data(dir) + "--calibration " + file + " -q --out " + dir + "/cal");
   ASSERT_EQ(mapped.status, 0) << mapped.output;
   EXPECT_NEAR(brierOf(dir + "/cal/metrics.json"), fit.brier, 2e-4);
-  const CliRun evaluated = cli("eval --map " + dir + "/cal/map.ot" + data(dir) + "--calibration " +
+  const CliResult evaluated = runCli("eval --map " + dir + "/cal/map.ot" + data(dir) + "--calibration " +
                             file + " --out " + dir + "/cal_eval");
   ASSERT_EQ(evaluated.status, 0) << evaluated.output;
   EXPECT_NEAR(brierOf(dir + "/cal_eval/metrics.json"), fit.brier, 2e-4);
@@ -114,7 +96,7 @@ TEST_F(Calibrate, ABadCalibrationFileIsRefusedWithItsLine) {
   const auto refused = [&](const std::string& text, const std::string& message) {
     const std::string file = dir + "/bad.yaml";
     std::ofstream(file) << text;
-    const CliRun r = cli("map" + data(dir) + "--calibration " + file + " -q --out " + dir + "/bad");
+    const CliResult r = runCli("map" + data(dir) + "--calibration " + file + " -q --out " + dir + "/bad");
     EXPECT_NE(r.status, 0) << text;
     EXPECT_NE(r.output.find(message), std::string::npos) << r.output;
   };
@@ -124,7 +106,7 @@ TEST_F(Calibrate, ABadCalibrationFileIsRefusedWithItsLine) {
   refused("length_scale: 0.3\n", "bad.yaml:1: unknown key 'length_scale'");
   refused("# nothing\n", "no evidence_cap in the calibration file");
   std::ofstream(dir + "/good.yaml") << "evidence_cap: 4\n";
-  const CliRun both = cli("map" + data(dir) + "--calibration " + dir + "/good.yaml" +
+  const CliResult both = runCli("map" + data(dir) + "--calibration " + dir + "/good.yaml" +
                        " --evidence-cap 3 -q --out " + dir + "/both");
   EXPECT_NE(both.status, 0);
   EXPECT_NE(both.output.find("excludes"), std::string::npos) << both.output;

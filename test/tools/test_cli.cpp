@@ -32,21 +32,9 @@ using evidential_octomap::EvidentialOcTree;
 
 namespace {
 
-struct Result {
-  int status;
-  std::string output;  // stdout and stderr
-};
+using Result = CliResult;
 
-Result run(const std::string& args) {
-  const std::string cmd = std::string(EVIDENTIAL_TEST_CLI) + " " + args + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-  std::string out;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe.get())) > 0) out.append(buf.data(), n);
-  const int status = pclose(pipe.release());
-  return {WEXITSTATUS(status), out};
-}
+Result run(const std::string& args) { return runCli(args); }
 
 nlohmann::json readJson(const std::string& path) {
   std::ifstream in(path);

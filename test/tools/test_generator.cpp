@@ -31,15 +31,9 @@ using namespace tools_test;
 namespace {
 
 int run(const std::string& args, std::string* output = nullptr) {
-  const std::string cmd = std::string(EVIDENTIAL_TEST_CLI) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  if (output) *output = out;
-  return WEXITSTATUS(status);
+  const CliResult r = runCli(args);
+  if (output) *output = r.output;
+  return r.status;
 }
 
 std::string readAll(const std::string& path) {

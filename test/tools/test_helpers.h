@@ -5,7 +5,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -56,6 +58,24 @@ inline bool killedAfter(double delay_ms, const std::function<void()>& child) {
   std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(delay_ms));
   ::kill(pid, SIGKILL);
   return ::waitpid(pid, nullptr, 0) == pid;
+}
+
+// The CLI (EVIDENTIAL_TEST_CLI) run with `args`: its exit status and stdout + stderr.
+struct CliResult {
+  int status = 0;
+  std::string output;
+};
+
+inline CliResult runCli(const std::string& args) {
+  const std::string cmd = std::string(EVIDENTIAL_TEST_CLI) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  CliResult r;
+  if (!pipe) return {127, "popen failed: " + cmd};
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
+  r.status = WEXITSTATUS(pclose(pipe));
+  return r;
 }
 
 template <typename T>
