@@ -114,12 +114,25 @@ class Feeder:
         self.pub = rospy.Publisher("/%s_cloud" % name, PointCloud2, queue_size=200)
         self.tf = tf2_ros.TransformBroadcaster()
         self.published = {}  # g -> wall time of publication
+        self.dead = []
+
+    def _connections(self):
+        return [c for p in (self.pub, self.tf.pub_tf) for c in p.impl.connections]
+
+    def forget_connections(self):
+        """Called when the node dies: its sockets may still count as subscribers until a write
+        fails, and a scan published into one of them is lost."""
+        self.dead = self._connections()  # the objects, kept alive: ids could be reused
 
     def wait_connected(self, timeout=30.0):
-        """Until the node subscribes to the clouds and to /tf (else the first scans are lost)."""
+        """Until the (re)started node subscribes to the clouds and to /tf over new connections
+        (else the first scans are lost)."""
+        dead = self.dead
         deadline = time.time() + timeout
         while time.time() < deadline:
-            if self.pub.get_num_connections() > 0 and self.tf.pub_tf.get_num_connections() > 0:
+            live = [p for p in (self.pub, self.tf.pub_tf)
+                    if any(all(c is not d for d in dead) for c in p.impl.connections)]
+            if len(live) == 2:
                 time.sleep(0.2)
                 return True
             time.sleep(0.05)
@@ -223,6 +236,7 @@ class AutosaveRecoveryTest(unittest.TestCase):
                 self.assertIsNotNone(status)
                 self.assertEqual(status.clouds_dropped_queue + status.clouds_dropped_invalid +
                                  status.clouds_dropped_tf, 0, status.last_error)
+                feeder.forget_connections()
                 node.kill()
                 node = None
                 g = last_inserted
@@ -283,8 +297,14 @@ class AutosaveRecoveryTest(unittest.TestCase):
             for case, reason in (("full", "No space left on device"),
                                  ("read-only", "Read-only file system")):
                 if case == "read-only":
-                    os.remove(filler)
-                    subprocess.run(["mount", "-o", "remount,ro", mount_dir], check=True)
+                    # The filler stays: with room again an autosave could land before the
+                    # remount. A remount while a write is open fails (busy): try again.
+                    for _ in range(50):
+                        if subprocess.run(["mount", "-o", "remount,ro", mount_dir]).returncode == 0:
+                            break
+                        time.sleep(0.1)
+                    else:
+                        self.fail("cannot remount %s read-only" % mount_dir)
                 failed_before = node.status.autosaves_failed
                 inserted_before = node.status.clouds_inserted
                 reply = node.save(saved)
