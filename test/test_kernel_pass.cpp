@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 #include <tuple>
 #include <vector>
@@ -68,6 +69,15 @@ std::map<KeyTuple, std::vector<double>> directEvaluation(
   const double resolution = tree.getResolution(), half = resolution / 2.0;
   const double epsilon = KernelTable::kMaxError * config.sigma0;
   std::map<KeyTuple, std::vector<double>> rows;
+  // class_aware_support: the classes (argmax) of the scan's points in each voxel.
+  std::map<KeyTuple, std::set<int>> classes_hit;
+  for (size_t i = 0; i < scan.points_W.size(); ++i) {
+    const float* e = &scan.evidence[i * num_classes];
+    const int argmax = int(std::max_element(e, e + num_classes) - e);
+    if (e[argmax] <= 0.0f) continue;
+    const octomap::OcTreeKey key = tree.coordToKey(scan.points_W.getPoint(i));
+    classes_hit[KeyTuple{key[0], key[1], key[2]}].insert(argmax);
+  }
   for (size_t i = 0; i < scan.points_W.size(); ++i) {
     const octomap::point3d& p = scan.points_W.getPoint(i);
     PointOpinion o;
@@ -101,6 +111,10 @@ std::map<KeyTuple, std::vector<double>> directEvaluation(
           const bool near_edge = distance >= length * 0.999 && distance < length * 1.001;
           if (k <= 0.0 && !near_edge) continue;
           const KeyTuple key{voxel[0], voxel[1], voxel[2]};
+          const auto hit = classes_hit.find(key);
+          if (config.class_aware_support && o.argmax >= 0 && hit != classes_hit.end() &&
+              !hit->second.count(o.argmax))
+            continue;  // hit by this scan's points of other classes only
           auto& row = rows[key];
           auto& b = (*bound)[key];
           row.resize(num_classes, 0.0);
@@ -125,10 +139,11 @@ TEST(KernelPass, MapStaysWithinTheTableErrorOfDirectEvaluation) {
   test::SyntheticScene scene;
   const test::SyntheticScan scan = scene.defaultScan();
   for (const std::string& rule : kFusionRuleNames) {
-    for (const std::string distance : {"voxel", "centre"}) {
+    for (const std::string distance : {"voxel", "centre", "voxel, class-aware"}) {
       SemanticConfig config;
       config.rule = rule;
-      config.kernel_distance = distance;
+      config.kernel_distance = distance.substr(0, distance.find(','));
+      config.class_aware_support = distance.find("class-aware") != std::string::npos;
       config.ds_multiplier = 0.0;            // every point, as the direct evaluation
       config.uncertainty_threshold = false;  // likewise
       config.length_scale = 0.45;            // supports of several voxels
@@ -159,6 +174,35 @@ TEST(KernelPass, MapStaysWithinTheTableErrorOfDirectEvaluation) {
       EXPECT_GT(with_evidence, 500u) << rule << " " << distance;
       EXPECT_GT(compared, with_evidence);
     }
+  }
+}
+
+// A pole of a few points standing on a dense ground of another class: with the class-aware
+// support the pole's voxels near the ground keep the pole's class, without it the ground's many
+// points outvote it; the ground itself keeps its class either way.
+TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
+  constexpr int kClasses = 3, kGround = 0, kPole = 1;
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  auto add = [&](float x, float y, float z, int label) {
+    points.push_back(x, y, z);
+    for (int c = 0; c < kClasses; ++c) evidence.push_back(c == label ? 20.0f : 0.0f);
+  };
+  for (float x = -1.0f; x <= 1.0f; x += 0.04f)
+    for (float y = -1.0f; y <= 1.0f; y += 0.04f) add(x, y, 0.02f, kGround);
+  for (float z = 0.1f; z <= 1.2f; z += 0.1f) add(0.05f, 0.05f, z, kPole);
+  for (bool class_aware : {false, true}) {
+    SemanticConfig config;
+    config.class_aware_support = class_aware;
+    config.ds_multiplier = 0.0;  // the count cap would keep a 2x2x2 block's first points only
+    config.threads = 2;
+    EvidentialOcTree tree(0.2, kClasses, config);
+    tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
+    const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
+    EXPECT_EQ(low_pole == kPole, class_aware) << "class-aware " << class_aware << ": label "
+                                              << low_pole;
+    EXPECT_EQ(tree.query(octomap::point3d(0.05f, 0.05f, 0.9f)).label, kPole);
+    EXPECT_EQ(tree.query(octomap::point3d(0.45f, 0.05f, 0.02f)).label, kGround);
   }
 }
 

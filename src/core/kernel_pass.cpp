@@ -25,6 +25,7 @@ KernelPass::KernelPass(const SemanticConfig& config, const EvidentialOcTree& tre
       gamma_(config.effectiveGamma()),
       uncertainty_kernel_(tree.rule().usesUncertaintyKernel()),
       to_cube_(config.kernel_distance == "voxel"),
+      class_aware_(config.class_aware_support),
       table_(config.sigma0) {}
 
 void KernelPass::preparePoints(const SemanticPoints& points, int threads,
@@ -70,6 +71,30 @@ void KernelPass::scatter(const KernelPoint& point, const octomap::point3d& posit
     case FusionRuleType::kEbs:
       return scatterWith(EbsContribution(point.opinion, num_classes_), point, position, base, out);
   }
+}
+
+static uint64_t classBit(int argmax) { return uint64_t(1) << (argmax & 63); }
+
+void KernelPass::markClasses(const KernelPoint& point, const octomap::OcTreeKey& base,
+                             KernelRows* rows) const {
+  rows->class_aware = class_aware_;
+  if (!class_aware_ || point.opinion.argmax < 0) return;  // no evidence: no class to protect
+  constexpr int kSize = 1 << kSubtreeLevels;
+  uint32_t local = 0;
+  for (int a = 2; a >= 0; --a) {
+    const int offset = int(point.key[a]) - int(base[a]);
+    if (offset < 0 || offset >= kSize) return;  // reaches this subtree from a neighbour
+    local = local << kSubtreeLevels | uint32_t(offset);
+  }
+  if (rows->classes.empty()) rows->classes.resize(size_t(1) << (3 * kSubtreeLevels), 0);
+  uint64_t& seen = rows->classes[local];
+  if (!seen) rows->classes_touched.push_back(local);
+  seen |= classBit(point.opinion.argmax);
+}
+
+void KernelPass::clearClasses(KernelRows* rows) {
+  for (uint32_t local : rows->classes_touched) rows->classes[local] = 0;
+  rows->classes_touched.clear();
 }
 
 template <class Contribution>
@@ -127,6 +152,10 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
     }
   }
   const size_t width = size_t(Contribution::kRowWidth) * num_classes_;
+  // Voxels hit this scan only by other classes are skipped (none when not class-aware).
+  const bool skip_others = out->class_aware && !out->classes_touched.empty() &&
+                           point.opinion.argmax >= 0;
+  const uint64_t own_class = skip_others ? classBit(point.opinion.argmax) : 0;
   const int x0 = int(point.key[0]) - int(base[0]), y0 = int(point.key[1]) - int(base[1]),
             z0 = int(point.key[2]) - int(base[2]);
   // x innermost: consecutive voxels of a mask word, the index and (mostly) the rows.
@@ -152,6 +181,10 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
         const int ox = __builtin_ctzll(voxels) - x0;
         voxels &= voxels - 1;
         const uint32_t local = line << kSubtreeLevels | uint32_t(x0 + ox);
+        if (skip_others) {
+          const uint64_t seen = out->classes[local];
+          if (seen && !(seen & own_class)) continue;
+        }
         // Summed as (x + y) + z, whatever the loop order, so the rounding never depends on it.
         const double k = table_((axis[0][ox] + axis[1][oy]) + sz);
         if (k <= 0.0) continue;

@@ -62,6 +62,11 @@ struct KernelRows {
   std::vector<uint32_t> touched;   // local voxels with a row, in row order
   std::vector<double> rows;        // while scattering: the contribution's row width, then C
   std::vector<double> axis_terms;  // per-axis d^2 terms of the point at hand
+  // SemanticConfig::class_aware_support: per local voxel, one bit per class (c mod 64) of this
+  // scan's points in it, 0 for a voxel no point hit; reset after use (classes_touched).
+  bool class_aware = false;
+  std::vector<uint64_t> classes;
+  std::vector<uint32_t> classes_touched;
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
 };
 
@@ -80,6 +85,11 @@ class KernelPass {
   // After the last scatter into `rows`: C increments per row (KernelRows::rows), as the rule's
   // add() takes them.
   void finishRows(KernelRows* rows) const;
+  // SemanticConfig::class_aware_support: KernelRows::classes of the points that lie in the
+  // subtree at `base` (before its scatters), and their reset (after).
+  void markClasses(const KernelPoint& point, const octomap::OcTreeKey& base,
+                   KernelRows* rows) const;
+  static void clearClasses(KernelRows* rows);
 
  private:
   // The loop itself, for one rule's contribution (fusion_contributions.h): inlined, no virtual
@@ -95,6 +105,7 @@ class KernelPass {
   double length_scale_, beta_, gamma_;
   bool uncertainty_kernel_;
   bool to_cube_;
+  bool class_aware_;
   KernelTable table_;
 };
 
