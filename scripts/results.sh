@@ -31,7 +31,7 @@ publish results_tables.md "Every rule, every evidence source, both protocols (bu
 
 ablation="dempster,ebs,dempster:ds_multiplier=2,dempster:ds_multiplier=3,dempster:ds_multiplier=8"
 ablation+=",dempster:length_scale=0.25,dempster:length_scale=0.35,dempster:sigma0=0.7"
-ablation+=",dempster:beta=0.5,dempster:downsampling=average"
+ablation+=",dempster:beta=0.5,dempster:downsampling=average,dempster:class_aware_support=true"
 "${cli}" compare "${kitti[@]}" --sources onehot,learned --protocols reconstruction,held-out \
   --no-rellis --variants "${ablation}" --out "${out}/ablation" --quiet > /dev/null
 publish results_ablation.md "Kernel and down-sampling ablations of the default (bundled data)" \

@@ -1,5 +1,5 @@
 // The adaptive read-out cap of a dempster map (evidence_cap = -1, the default; docs/calibration.md):
-// cap = 3.7 m^0.4, clamped to [1, 100], m the mean over the inserted points of a point's own
+// cap = 2.71 m^0.55, clamped to [1, 100], m the mean over the inserted points of a point's own
 // sum_c log1p(e^c / C); 3 before any evidence. The constants are the documented formula, written
 // out here rather than taken from the library, so a change to them fails this test.
 #include <gtest/gtest.h>
@@ -16,7 +16,7 @@
 namespace evidential_octomap {
 namespace {
 
-double documentedCap(double m) { return std::min(100.0, std::max(1.0, 3.7 * std::pow(m, 0.4))); }
+double documentedCap(double m) { return std::min(100.0, std::max(1.0, 2.71 * std::pow(m, 0.55))); }
 
 // A scan whose every point carries evidence `magnitude` for class 0 only, so every sampled point
 // has the same statistic log1p(magnitude / C) and the sampling of points does not matter.
@@ -72,7 +72,7 @@ TEST(AdaptiveCap, ScalingTheEvidenceUpRaisesTheCap) {
 TEST(AdaptiveCap, IsClampedToOneForNearlyVacuousEvidence) {
   test::SyntheticScene scene;
   EvidentialOcTree tree(0.2, scene.num_classes);
-  insert(&tree, uniformScan(scene, 0.01f, 1));  // m = log1p(0.01 / 3): 3.7 m^0.4 = 0.38
+  insert(&tree, uniformScan(scene, 0.01f, 1));  // m = log1p(0.01 / 3): 2.71 m^0.55 = 0.12
   EXPECT_EQ(tree.effectiveEvidenceCap(), 1.0);
 }
 

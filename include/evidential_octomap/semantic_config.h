@@ -48,7 +48,7 @@ struct MapSettings {
   // kAdaptiveCap (the default): the cap follows the evidence. The tree sets it after every
   // insert to adaptiveEvidenceCap(m), m the mean over the points it was given of a point's own
   // log-evidence sum_c log1p(e^c / C): a confident network (large m) earns a higher cap, though
-  // fewer points' worth of it (about 3.7 m^0.4). The constants were chosen leave-one-dataset-
+  // fewer points' worth of it (about 2.71 m^0.55). The constants were chosen leave-one-dataset-
   // family-out over the bundled sequence and generated off-road sequences of four scene
   // families, network behaviours and evidence scales (docs/calibration.md); the statistic is
   // stored in the map and adds under merge, so merged maps read as sequential ones. A value >= 0
@@ -59,7 +59,7 @@ struct MapSettings {
   // The adaptive cap of a map that has no statistic yet (payloads set by hand, or read from a
   // format without it).
   static constexpr double kCapWithoutStatistic = 3.0;
-  static constexpr double kAdaptiveCapScale = 3.7, kAdaptiveCapExponent = 0.4;
+  static constexpr double kAdaptiveCapScale = 2.71, kAdaptiveCapExponent = 0.55;
   static constexpr double kMinAdaptiveCap = 1.0, kMaxAdaptiveCap = 100.0;
   static double adaptiveEvidenceCap(double mean_point_log_evidence);
 

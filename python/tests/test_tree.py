@@ -254,4 +254,4 @@ def test_the_adaptive_cap_follows_the_inserted_evidence():
     tree.insert_scan(points, evidence, origin=ORIGIN)
     m = np.log1p(30.0 / 3)
     assert tree.mean_point_log_evidence == pytest.approx(m)
-    assert tree.effective_evidence_cap == pytest.approx(3.7 * m ** 0.4)
+    assert tree.effective_evidence_cap == pytest.approx(2.71 * m ** 0.55)

@@ -48,3 +48,17 @@ map_both kitti_learned "${kitti}" "${root}/config/classes_semantickitti.yaml" le
 map_both kitti_onehot "${kitti}" "${root}/config/classes_semantickitti.yaml" onehot
 "${python}" "${root}/scripts/calibration/collect_log_evidence.py" "${out}"
 "${python}" "${root}/scripts/calibration/select_cap.py" "${out}" | tee "${out}/selection.md"
+# Into docs/calibration.md, between its selection markers, stamped.
+/usr/bin/python3 - "${root}/docs/calibration.md" "${out}/selection.md" \
+  "commit $(git -C "${root}" rev-parse --short HEAD), $(date -u +%Y-%m-%d)" <<'EOF'
+import sys
+page_path, table_path, stamp = sys.argv[1:]
+begin, end = "<!-- selection: begin -->", "<!-- selection: end -->"
+page = open(page_path).read()
+if begin not in page or end not in page:
+    sys.exit("%s: no %s ... %s block" % (page_path, begin, end))
+head, rest = page.split(begin, 1)
+text = ("Output of `bash scripts/calibration/select_cap.sh` (%s), verbatim:\n" % stamp +
+        open(table_path).read())
+open(page_path, "w").write(head + begin + "\n" + text + end + rest.split(end, 1)[1])
+EOF
