@@ -24,7 +24,9 @@ SemanticConfig withOtherValue(const Setting& s) {
   const SemanticConfig defaults;
   if (!s.choices.empty()) {
     for (const std::string& choice : s.choices) {
-      if (choice != s.valueText(defaults)) EXPECT_TRUE(s.parse(choice, &c));
+      if (choice != s.valueText(defaults)) {
+        EXPECT_TRUE(s.parse(choice, &c));
+      }
     }
     return c;
   }

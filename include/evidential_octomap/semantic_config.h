@@ -121,8 +121,8 @@ struct InsertSettings {
   // points hit with other classes only (a voxel hit by no point of this scan, or by one of the
   // point's class, still gets its evidence; a point always reaches its own voxel). Without it
   // the many points of a road or a wall outvote the few of a person or a pole standing on it.
-  // Off by default: on the bundled scans it lifts person from 3.0 to 6.3 IoU (learned evidence)
-  // but costs calibration (Brier +0.6 %, one-hot AUROC u -0.014; docs/results.md).
+  // Off by default: on the bundled scans it keeps more of the person class but reads a little
+  // less calibrated (docs/results_ablation.md).
   // An insertion setting: not stored in the map.
   bool class_aware_support = false;
   static constexpr int kMaxClearingObservations = 1000;

@@ -76,9 +76,9 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
       class_names_(rhs.class_names_),
       config_(rhs.config_),
       rule_(rhs.makeRule(rhs.config_)),
+      pool_(std::make_unique<PayloadStore>(rhs.num_classes_, rhs.rule_->prior())),
       evidence_log_sum_(rhs.evidence_log_sum_),
-      evidence_points_(rhs.evidence_points_),
-      pool_(std::make_unique<PayloadStore>(rhs.num_classes_, rhs.rule_->prior())) {
+      evidence_points_(rhs.evidence_points_) {
   // OctoMap's own copy constructor slices derived nodes, so the nodes are copied here.
   clamping_thres_min = rhs.clamping_thres_min;
   clamping_thres_max = rhs.clamping_thres_max;

@@ -1,10 +1,13 @@
 #include "ros_params.h"
 
-#include <cmath>
-
+#include <dynamic_reconfigure/Config.h>
 #include <ros/package.h>
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
+#include <type_traits>
+#include <variant>
 
 #include "evidential_octomap/settings.h"
 
@@ -111,19 +114,63 @@ void readOccupancyParams(const ros::NodeHandle& nh, EvidentialOcTree* tree) {
   tree->setSensorModel(model);
 }
 
+namespace {
+
+// A dynamic_reconfigure parameter's name for a setting of the list: its ~param with "/" as "_".
+std::string reconfigureName(const Setting& s) {
+  std::string name = s.rosName();
+  std::replace(name.begin(), name.end(), '/', '_');
+  return name;
+}
+
+template <class Param>
+Param& paramOf(std::vector<Param>* params, const std::string& name) {
+  for (Param& p : *params)
+    if (p.name == name) return p;
+  throw std::logic_error("Mapping.cfg has no parameter " + name);  // test_settings checks it
+}
+
+// Each reconfigurable setting of the list between `semantic` and the Config message.
+void settingsToMessage(const SemanticConfig& semantic, dynamic_reconfigure::Config* msg) {
+  for (const Setting& s : settingList()) {
+    if (!s.reconfigurable) continue;
+    std::visit([&](auto member) {
+      using T = std::decay_t<decltype(semantic.*member)>;
+      if constexpr (std::is_same_v<T, bool>) {
+        paramOf(&msg->bools, reconfigureName(s)).value = semantic.*member;
+      } else if constexpr (std::is_floating_point_v<T>) {
+        paramOf(&msg->doubles, reconfigureName(s)).value = semantic.*member;
+      } else if constexpr (std::is_integral_v<T>) {
+        paramOf(&msg->ints, reconfigureName(s)).value = semantic.*member;
+      }
+    }, s.field);
+  }
+}
+
+void settingsFromMessage(dynamic_reconfigure::Config* msg, SemanticConfig* semantic) {
+  for (const Setting& s : settingList()) {
+    if (!s.reconfigurable) continue;
+    std::visit([&](auto member) {
+      using T = std::decay_t<decltype(semantic->*member)>;
+      if constexpr (std::is_same_v<T, bool>) {
+        semantic->*member = paramOf(&msg->bools, reconfigureName(s)).value;
+      } else if constexpr (std::is_floating_point_v<T>) {
+        semantic->*member = static_cast<T>(paramOf(&msg->doubles, reconfigureName(s)).value);
+      } else if constexpr (std::is_integral_v<T>) {
+        semantic->*member = static_cast<T>(paramOf(&msg->ints, reconfigureName(s)).value);
+      }
+    }, s.field);
+  }
+}
+
+}  // namespace
+
 void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
                    const NodeConfig& node, MappingConfig* rc) {
-  rc->length_scale = semantic.length_scale;
-  rc->sigma0 = semantic.sigma0;
-  rc->beta = semantic.beta;
-  rc->gamma = semantic.gamma;
-  rc->drop_percent = semantic.drop_percent;
-  rc->adaptive_length = semantic.adaptive_length;
-  rc->uncertainty_threshold = semantic.uncertainty_threshold;
-  rc->reference_compat = semantic.reference_compat;
-  rc->ds_multiplier = semantic.ds_multiplier;
-  rc->kernel_creates_leaves = semantic.kernel_creates_leaves;
-  rc->sensor_model_max_range = semantic.max_range;
+  dynamic_reconfigure::Config msg;
+  rc->__toMessage__(msg);
+  settingsToMessage(semantic, &msg);
+  rc->__fromMessage__(msg);
   rc->sensor_model_hit = tree.getProbHit();
   rc->sensor_model_miss = tree.getProbMiss();
   rc->sensor_model_min = tree.getClampingThresMin();
@@ -134,17 +181,9 @@ void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
 
 void fromReconfigure(const MappingConfig& rc, SemanticConfig* semantic, NodeConfig* node,
                      SensorModel* model) {
-  semantic->length_scale = rc.length_scale;
-  semantic->sigma0 = rc.sigma0;
-  semantic->beta = rc.beta;
-  semantic->gamma = rc.gamma;
-  semantic->drop_percent = rc.drop_percent;
-  semantic->adaptive_length = rc.adaptive_length;
-  semantic->uncertainty_threshold = rc.uncertainty_threshold;
-  semantic->reference_compat = rc.reference_compat;
-  semantic->ds_multiplier = rc.ds_multiplier;
-  semantic->kernel_creates_leaves = rc.kernel_creates_leaves;
-  semantic->max_range = rc.sensor_model_max_range;
+  dynamic_reconfigure::Config msg;
+  rc.__toMessage__(msg);
+  settingsFromMessage(&msg, semantic);
   model->hit = rc.sensor_model_hit;
   model->miss = rc.sensor_model_miss;
   model->clamp_min = rc.sensor_model_min;

@@ -75,7 +75,8 @@ void readOccupancyParams(const ros::NodeHandle& nh, EvidentialOcTree* tree);
 
 // dynamic_reconfigure (src/ros/cfg/Mapping.cfg): the values in use -> the server's config, and a
 // config from the server -> semantic config, node config and sensor model, unchecked (the server
-// checks them with reconfigureProblem before anything is applied).
+// checks them with reconfigureProblem before anything is applied). The semantic settings are
+// the list's reconfigurable ones (settings.h), by their ~param names with "/" as "_".
 void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
                    const NodeConfig& node, MappingConfig* rc);
 void fromReconfigure(const MappingConfig& rc, SemanticConfig* semantic, NodeConfig* node,

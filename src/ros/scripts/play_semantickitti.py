@@ -248,6 +248,7 @@ def main():
     # Looping replays each cloud from memory (~12 MB a scan) with a new stamp: learned evidence
     # takes the player ~1 s a scan to compute, which would otherwise bound the replay rate.
     clouds = {}
+    next_start = rospy.Time.now()
     while not rospy.is_shutdown():
         for i, name in enumerate(scans):
             if rospy.is_shutdown():
@@ -260,12 +261,15 @@ def main():
                 cloud, tf = scan_messages(i, name, stamp)
                 if loop:
                     clouds[i] = cloud
+            # TF first; the mapping node's tf2 MessageFilter holds the cloud until it has it.
             tf_pub.publish(TFMessage([tf]))
-            rospy.sleep(0.05)  # TF first, so the mapping node's MessageFilter has it
             cloud_pub.publish(cloud)
             rospy.loginfo("scan %s: %d points", name, cloud.width)
-            if period > rospy.Duration(0):
-                rospy.sleep(period)
+            if period > rospy.Duration(0):  # a steady rate: the time a scan took is not added
+                next_start = max(next_start + period, rospy.Time.now() - period)
+                remaining = next_start - rospy.Time.now()
+                if remaining > rospy.Duration(0):
+                    rospy.sleep(remaining)
         if not loop:
             break
     # Keep TF alive a little for late subscribers, then stop.
