@@ -222,7 +222,8 @@ size_t ScanSubtrees::capacityBytes() const {
   for (const PerThread& t : threads_) {
     const KernelRows& k = t.kernel;
     bytes += vectorBytes(k.mask) + vectorBytes(k.index) + vectorBytes(k.touched) +
-             vectorBytes(k.rows) + vectorBytes(k.axis_terms) + vectorBytes(t.order) +
+             vectorBytes(k.rows) + vectorBytes(k.axis_terms) + vectorBytes(k.classes) +
+             vectorBytes(k.classes_touched) + vectorBytes(t.order) +
              vectorBytes(t.order_buffer) + vectorBytes(t.updates);
   }
   return bytes;
