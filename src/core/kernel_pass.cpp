@@ -77,8 +77,7 @@ static uint64_t classBit(int argmax) { return uint64_t(1) << (argmax & 63); }
 
 void KernelPass::markClasses(const KernelPoint& point, const octomap::OcTreeKey& base,
                              KernelRows* rows) const {
-  rows->class_aware = class_aware_;
-  if (!class_aware_ || point.opinion.argmax < 0) return;  // no evidence: no class to protect
+  if (point.opinion.argmax < 0) return;  // no evidence: no class to protect
   constexpr int kSize = 1 << kSubtreeLevels;
   uint32_t local = 0;
   for (int a = 2; a >= 0; --a) {
@@ -153,7 +152,7 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
   }
   const size_t width = size_t(Contribution::kRowWidth) * num_classes_;
   // Voxels hit this scan only by other classes are skipped (none when not class-aware).
-  const bool skip_others = out->class_aware && !out->classes_touched.empty() &&
+  const bool skip_others = class_aware_ && !out->classes_touched.empty() &&
                            point.opinion.argmax >= 0;
   const uint64_t own_class = skip_others ? classBit(point.opinion.argmax) : 0;
   const int x0 = int(point.key[0]) - int(base[0]), y0 = int(point.key[1]) - int(base[1]),

@@ -64,7 +64,6 @@ struct KernelRows {
   std::vector<double> axis_terms;  // per-axis d^2 terms of the point at hand
   // SemanticConfig::class_aware_support: per local voxel, one bit per class (c mod 64) of this
   // scan's points in it, 0 for a voxel no point hit; reset after use (classes_touched).
-  bool class_aware = false;
   std::vector<uint64_t> classes;
   std::vector<uint32_t> classes_touched;
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
@@ -87,6 +86,7 @@ class KernelPass {
   void finishRows(KernelRows* rows) const;
   // SemanticConfig::class_aware_support: KernelRows::classes of the points that lie in the
   // subtree at `base` (before its scatters), and their reset (after).
+  bool classAware() const { return class_aware_; }
   void markClasses(const KernelPoint& point, const octomap::OcTreeKey& base,
                    KernelRows* rows) const;
   static void clearClasses(KernelRows* rows);

@@ -158,13 +158,14 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
   if (range.first_point < range.last_point) buildMask(i, existing, &kernel);
   kernel.touched.clear();
   kernel.rows.clear();
-  for (size_t p = range.first_point; p < range.last_point; ++p)
+  const bool class_aware = kernel_->classAware();
+  for (size_t p = range.first_point; class_aware && p < range.last_point; ++p)
     kernel_->markClasses((*kernel_points_)[point_subtrees_[p].second], base, &kernel);
   for (size_t p = range.first_point; p < range.last_point; ++p) {
     const uint32_t j = point_subtrees_[p].second;
     kernel_->scatter((*kernel_points_)[j], points_->positions[j], base, &kernel);
   }
-  KernelPass::clearClasses(&kernel);
+  if (class_aware) KernelPass::clearClasses(&kernel);
   t.most_row_values = std::max(t.most_row_values, kernel.rows.size());
   t.most_rows = std::max(t.most_rows, kernel.touched.size());
   kernel_->finishRows(&kernel);

@@ -130,34 +130,28 @@ Param& paramOf(std::vector<Param>* params, const std::string& name) {
   throw std::logic_error("Mapping.cfg has no parameter " + name);  // test_settings checks it
 }
 
-// Each reconfigurable setting of the list between `semantic` and the Config message.
-void settingsToMessage(const SemanticConfig& semantic, dynamic_reconfigure::Config* msg) {
+// Copies each reconfigurable setting of the list from `semantic` into the Config message, or
+// (to_message false) back.
+void exchangeSettings(dynamic_reconfigure::Config* msg, SemanticConfig* semantic,
+                      bool to_message) {
   for (const Setting& s : settingList()) {
     if (!s.reconfigurable) continue;
     std::visit([&](auto member) {
-      using T = std::decay_t<decltype(semantic.*member)>;
+      auto& field = semantic->*member;
+      using T = std::decay_t<decltype(field)>;
+      const auto copy = [&](auto& value) {
+        if (to_message) {
+          value = field;
+        } else {
+          field = static_cast<T>(value);
+        }
+      };
       if constexpr (std::is_same_v<T, bool>) {
-        paramOf(&msg->bools, reconfigureName(s)).value = semantic.*member;
+        copy(paramOf(&msg->bools, reconfigureName(s)).value);
       } else if constexpr (std::is_floating_point_v<T>) {
-        paramOf(&msg->doubles, reconfigureName(s)).value = semantic.*member;
+        copy(paramOf(&msg->doubles, reconfigureName(s)).value);
       } else if constexpr (std::is_integral_v<T>) {
-        paramOf(&msg->ints, reconfigureName(s)).value = semantic.*member;
-      }
-    }, s.field);
-  }
-}
-
-void settingsFromMessage(dynamic_reconfigure::Config* msg, SemanticConfig* semantic) {
-  for (const Setting& s : settingList()) {
-    if (!s.reconfigurable) continue;
-    std::visit([&](auto member) {
-      using T = std::decay_t<decltype(semantic->*member)>;
-      if constexpr (std::is_same_v<T, bool>) {
-        semantic->*member = paramOf(&msg->bools, reconfigureName(s)).value;
-      } else if constexpr (std::is_floating_point_v<T>) {
-        semantic->*member = static_cast<T>(paramOf(&msg->doubles, reconfigureName(s)).value);
-      } else if constexpr (std::is_integral_v<T>) {
-        semantic->*member = static_cast<T>(paramOf(&msg->ints, reconfigureName(s)).value);
+        copy(paramOf(&msg->ints, reconfigureName(s)).value);
       }
     }, s.field);
   }
@@ -169,7 +163,8 @@ void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
                    const NodeConfig& node, MappingConfig* rc) {
   dynamic_reconfigure::Config msg;
   rc->__toMessage__(msg);
-  settingsToMessage(semantic, &msg);
+  SemanticConfig values = semantic;
+  exchangeSettings(&msg, &values, true);
   rc->__fromMessage__(msg);
   rc->sensor_model_hit = tree.getProbHit();
   rc->sensor_model_miss = tree.getProbMiss();
@@ -183,7 +178,7 @@ void fromReconfigure(const MappingConfig& rc, SemanticConfig* semantic, NodeConf
                      SensorModel* model) {
   dynamic_reconfigure::Config msg;
   rc.__toMessage__(msg);
-  settingsFromMessage(&msg, semantic);
+  exchangeSettings(&msg, semantic, false);
   model->hit = rc.sensor_model_hit;
   model->miss = rc.sensor_model_miss;
   model->clamp_min = rc.sensor_model_min;
