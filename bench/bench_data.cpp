@@ -1,143 +1,46 @@
 #include "bench_data.h"
 
 #include <evidential_octomap/class_table.h>
-#include <evidential_octomap/learned_evidence.h>
+#include <evidential_octomap/evaluation/dataset.h>
+#include <evidential_octomap/evidence/evidence_sources.h>
+#include <evidential_octomap/evidence/learned_evidence.h>
 #include <evidential_octomap/subjective_logic.h>
 #include <sys/resource.h>
 #include <time.h>
 
 #include <algorithm>
-#include <array>
 #include <fstream>
-#include <numeric>
-#include <random>
-#include <sstream>
 #include <stdexcept>
 
 namespace evbench {
-namespace {
-
-Mat4 identity() { return {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1}; }
-
-Mat4 fromRow12(const std::vector<double>& v) {
-  Mat4 m = identity();
-  std::copy(v.begin(), v.begin() + 12, m.begin());
-  return m;
-}
-
-Mat4 multiply(const Mat4& a, const Mat4& b) {
-  Mat4 c{};
-  for (int r = 0; r < 4; ++r)
-    for (int k = 0; k < 4; ++k)
-      for (int col = 0; col < 4; ++col) c[r * 4 + col] += a[r * 4 + k] * b[k * 4 + col];
-  return c;
-}
-
-// Inverse of a rigid (or near-rigid) 3x4 transform: [R t]^-1 = [R^T  -R^T t].
-Mat4 inverseRigid(const Mat4& m) {
-  Mat4 inv = identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) inv[r * 4 + c] = m[c * 4 + r];
-  for (int r = 0; r < 3; ++r) {
-    double t = 0.0;
-    for (int c = 0; c < 3; ++c) t -= inv[r * 4 + c] * m[c * 4 + 3];
-    inv[r * 4 + 3] = t;
-  }
-  return inv;
-}
-
-std::vector<double> parseNumbers(const std::string& line) {
-  std::istringstream in(line);
-  std::vector<double> out;
-  double v;
-  while (in >> v) out.push_back(v);
-  return out;
-}
-
-template <typename T>
-std::vector<T> readBinary(const std::string& path) {
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) throw std::runtime_error("cannot open " + path);
-  const std::streamsize bytes = in.tellg();
-  if (bytes % static_cast<std::streamsize>(sizeof(T)) != 0) {
-    throw std::runtime_error(path + ": size is not a multiple of " + std::to_string(sizeof(T)));
-  }
-  in.seekg(0);
-  std::vector<T> data(static_cast<size_t>(bytes) / sizeof(T));
-  if (!in.read(reinterpret_cast<char*>(data.data()), bytes)) {
-    throw std::runtime_error("cannot read " + path);
-  }
-  return data;
-}
-
-std::string scanName(int i) {
-  char name[16];
-  std::snprintf(name, sizeof(name), "%06d", i);
-  return name;
-}
-
-}  // namespace
 
 KittiSequence::KittiSequence(const std::string& folder, const std::string& class_yaml)
-    : folder_(folder),
-      classes_(std::make_shared<const evidential_octomap::ClassTable>(
-          evidential_octomap::ClassTable::load(class_yaml))) {
-  Mat4 tr;
-  bool have_tr = false;
-  {
-    std::ifstream calib(folder + "/calib.txt");
-    if (!calib) throw std::runtime_error("cannot open " + folder + "/calib.txt");
-    std::string line;
-    while (std::getline(calib, line)) {
-      if (line.rfind("Tr:", 0) == 0) {
-        const auto v = parseNumbers(line.substr(3));
-        if (v.size() != 12) throw std::runtime_error("calib.txt: Tr needs 12 numbers");
-        tr = fromRow12(v);
-        have_tr = true;
-      }
-    }
-  }
-  if (!have_tr) throw std::runtime_error(folder + "/calib.txt has no Tr line");
-  const Mat4 tr_inv = inverseRigid(tr);
-  std::ifstream poses(folder + "/poses.txt");
-  if (!poses) throw std::runtime_error("cannot open " + folder + "/poses.txt");
-  std::string line;
-  while (std::getline(poses, line)) {
-    const auto v = parseNumbers(line);
-    if (v.empty()) continue;
-    if (v.size() != 12)
-      throw std::runtime_error("poses.txt line " + std::to_string(poses_.size() + 1));
-    poses_.push_back(multiply(tr_inv, multiply(fromRow12(v), tr)));  // T_world_velo
-  }
+    : classes_(std::make_shared<const evidential_octomap::ClassTable>(
+          evidential_octomap::ClassTable::load(class_yaml))),
+      dataset_(std::make_shared<const evidential_octomap::Dataset>(
+          evidential_octomap::Dataset::open(folder, *classes_))) {
+  if (!dataset_->hasPredictions()) throw std::runtime_error(folder + " has no predictions/");
 }
+
+size_t KittiSequence::size() const { return dataset_->size(); }
 
 int KittiSequence::numClasses() const { return classes_->numClasses(); }
 
 Scan KittiSequence::load(int i) const {
-  if (i < 0 || size_t(i) >= poses_.size())
-    throw std::runtime_error("poses.txt has no line for scan " + std::to_string(i));
-  const Mat4& t = poses_[size_t(i)];
-  const auto xyzi = readBinary<float>(folder_ + "/velodyne/" + scanName(i) + ".bin");
-  const auto labels = readBinary<uint32_t>(folder_ + "/predictions/" + scanName(i) + ".label");
-  if (xyzi.size() % 4 != 0 || labels.size() != xyzi.size() / 4) {
-    throw std::runtime_error("scan " + scanName(i) + ": point and label counts differ");
+  if (i < 0 || size_t(i) >= size()) {
+    throw std::runtime_error("the sequence has no scan " + std::to_string(i));
   }
+  const evidential_octomap::Scan read = dataset_->load(size_t(i));
   Scan scan;
-  const size_t n = labels.size();
-  scan.points_W.reserve(n);
-  scan.classes.resize(n);
-  scan.xyz_S.resize(3 * n);
-  scan.remission.resize(n);
-  for (size_t j = 0; j < n; ++j) {
-    const double x = xyzi[4 * j], y = xyzi[4 * j + 1], z = xyzi[4 * j + 2];
-    std::copy(&xyzi[4 * j], &xyzi[4 * j + 3], &scan.xyz_S[3 * j]);
-    scan.remission[j] = xyzi[4 * j + 3];
-    scan.points_W.push_back(float(t[0] * x + t[1] * y + t[2] * z + t[3]),
-                            float(t[4] * x + t[5] * y + t[6] * z + t[7]),
-                            float(t[8] * x + t[9] * y + t[10] * z + t[11]));
-    scan.classes[j] = classes_->classOfRaw(labels[j]);
+  scan.points_W = read.pointsW();
+  const Eigen::Vector3d origin = read.originW();
+  scan.origin_W = octomap::point3d(float(origin.x()), float(origin.y()), float(origin.z()));
+  scan.classes = read.predicted;
+  scan.remission = read.remission;
+  scan.xyz_S.reserve(3 * read.size());
+  for (const Eigen::Vector3f& p : read.points_S) {
+    scan.xyz_S.insert(scan.xyz_S.end(), {p.x(), p.y(), p.z()});
   }
-  scan.origin_W = octomap::point3d(float(t[3]), float(t[7]), float(t[11]));
   return scan;
 }
 
@@ -196,10 +99,8 @@ std::vector<float> learnedEvidence(const Scan& scan, const std::string& model_pa
 }
 
 std::string defaultLearnedModel(const std::string& class_yaml) {
-  const auto classes = evidential_octomap::ClassTable::load(class_yaml);
-  const size_t slash = class_yaml.find_last_of('/');
-  const std::string dir = slash == std::string::npos ? "." : class_yaml.substr(0, slash);
-  return dir + "/learned/" + classes.dataset + ".model";
+  return evidential_octomap::defaultLearnedModel(class_yaml,
+                                                 evidential_octomap::ClassTable::load(class_yaml));
 }
 
 double median(std::vector<double> values) {

@@ -13,6 +13,7 @@
 
 namespace evidential_octomap {
 struct ClassTable;
+class Dataset;
 }
 
 namespace evbench {
@@ -32,22 +33,19 @@ struct Scan {
   std::vector<float> remission;  // N
 };
 
-using Mat4 = std::array<double, 16>;  // row-major
-
-// A SemanticKITTI-style folder (velodyne/, predictions/, poses.txt, calib.txt): scans loaded one
-// at a time, so a long sequence never has to fit in memory. Throws std::runtime_error naming the
-// file on any problem.
+// A SemanticKITTI-style folder (velodyne/, predictions/, poses.txt, calib.txt), read by the
+// evaluation library's Dataset: scans loaded one at a time, so a long sequence never has to fit
+// in memory. Throws std::runtime_error naming the file on any problem.
 class KittiSequence {
  public:
   KittiSequence(const std::string& folder, const std::string& class_yaml);
-  size_t size() const { return poses_.size(); }
+  size_t size() const;
   int numClasses() const;
   Scan load(int i) const;
 
  private:
-  std::string folder_;
-  std::shared_ptr<const evidential_octomap::ClassTable> classes_;
-  std::vector<Mat4> poses_;  // T_world_velo
+  std::shared_ptr<const evidential_octomap::ClassTable> classes_;  // the dataset keeps a pointer
+  std::shared_ptr<const evidential_octomap::Dataset> dataset_;
 };
 
 // The scan indices of a revisit: 0..unique-1, then back and forth at the real poses

@@ -14,7 +14,7 @@
 
 #include <octomap/OcTree.h>
 
-#include <evidential_octomap/kernel.h>
+#include <evidential_octomap/sparse_kernel.h>
 
 #include "bench_data.h"
 

@@ -16,12 +16,14 @@
 #include <tuple>
 #include <vector>
 
-#include "dataset.h"
+#include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/evidential_octree.h"
 
 using evidential_octomap::EvidentialOcTree;
 using evidential_octomap::SemanticConfig;
-namespace tools = evidential_octomap::tools;
+using evidential_octomap::Dataset;
+using evidential_octomap::readLabelFile;
+using evidential_octomap::Scan;
 
 namespace {
 
@@ -92,7 +94,7 @@ struct Point {
   int mover;  // instance, 0 static
 };
 
-void run(const tools::Dataset& data, int classes, std::map<int, Mover>& movers, int k, int lag,
+void run(const Dataset& data, int classes, std::map<int, Mover>& movers, int k, int lag,
          std::vector<Point>* points, bool collect) {
   SemanticConfig config;
   config.clearing_observations = k;
@@ -100,9 +102,9 @@ void run(const tools::Dataset& data, int classes, std::map<int, Mover>& movers, 
   std::ostringstream ghosts;
   double freed_total = 0, ghost_total = 0;
   for (size_t i = 0; i < data.size(); ++i) {
-    tools::Scan scan = data.load(i);
+    Scan scan = data.load(i);
     if (collect) {
-      const auto raw = tools::readLabelFile(data.path() + "/labels/" + scan.name + ".label");
+      const auto raw = readLabelFile(data.path() + "/labels/" + scan.name + ".label");
       for (size_t j = 0; j < scan.size(); ++j) {
         const Eigen::Vector3f w = scan.pointW(j);
         const int instance = int(raw[j] >> 16);
@@ -167,7 +169,7 @@ int main(int argc, char** argv) {
   const std::string dir = argv[1];
   const int lag = argc > 3 ? std::stoi(argv[3]) : 10;
   const auto table = evidential_octomap::ClassTable::load(dir + "/classes.yaml");
-  const tools::Dataset data = tools::Dataset::open(dir, table);
+  const Dataset data = Dataset::open(dir, table);
   auto movers = readMovers(dir + "/movers.csv");
   std::vector<Point> points;
   std::stringstream ks(argv[2]);

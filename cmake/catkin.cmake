@@ -40,6 +40,6 @@ generate_dynamic_reconfigure_options(src/ros/cfg/Mapping.cfg)
 
 catkin_package(
   INCLUDE_DIRS include
-  LIBRARIES evidential_octomap
+  LIBRARIES evidential_octomap  # the map only; evaluation and evidence are linked by name
   CATKIN_DEPENDS message_runtime std_msgs geometry_msgs
   DEPENDS OCTOMAP)

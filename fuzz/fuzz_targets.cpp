@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "../src/core/crc32.h"
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
@@ -184,8 +185,8 @@ void exercise(EvidentialOcTree& tree, bool heavy) {
   // The copy constructor and then the edits the integrator does.
   EvidentialOcTree copy(tree);
   require(writeOt(copy) == first, "copy constructor changed the map");
-  copy.updateInnerNodes();
-  copy.compactPayloads();
+  detail::TreeEditing::updateInnerNodes(copy);
+  detail::TreeEditing::compactPayloads(copy);
   for (auto it = copy.begin_tree(), end = copy.end_tree(); it != end; ++it) {
     checkOpinion(copy, &*it, "after updateInnerNodes");
   }

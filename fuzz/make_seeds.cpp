@@ -19,6 +19,7 @@
 #include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
@@ -156,12 +157,12 @@ int main(int argc, char** argv) {
         key[0] += i & 1;
         key[1] += (i >> 1) & 1;
         key[2] += (i >> 2) & 1;
-        auto* leaf = tree.leafForUpdate(key, true);
+        auto* leaf = evidential_octomap::detail::TreeEditing::leafForUpdate(tree, key, true);
         leaf->setLogOdds(0.85f);
         const float payload[2] = {1.5f, 0.25f};
-        tree.setPayload(leaf, payload);
+        evidential_octomap::detail::TreeEditing::setPayload(tree, leaf, payload);
       }
-      tree.updateInnerNodes();
+      evidential_octomap::detail::TreeEditing::updateInnerNodes(tree);
       save(tree, ot + "pruned_c2.ot");
     }
     kittiMap(source, ot + "kitti08_000000_c20.ot");

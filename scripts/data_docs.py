@@ -6,7 +6,7 @@ diagrams of the network presets (from each dataset's network_metrics.json).
   data_docs.py topdown DATASET OUT.png [--stamp TEXT]
   data_docs.py reliability OUT.png --stamp TEXT NAME=DATASET ...
 
-Reads the dataset as src/tools/dataset.h does: T_W_S = inv(Tr) P Tr.
+Reads the dataset as evaluation/dataset.h does: T_W_S = inv(Tr) P Tr.
 """
 import argparse
 import json

@@ -271,9 +271,7 @@ py_stamp="${py_venv}/.installed-sources"
 # Content hash of everything the wheel is built from, so an unchanged tree skips pip.
 python_sources_hash() {
   find pyproject.toml CMakeLists.txt cmake python/src python/evidential_octomap include src/core \
-    src/tools/dataset.cpp src/tools/dataset.h src/tools/evidence_sources.cpp \
-    src/tools/evidence_sources.h src/tools/calibration_file.cpp src/tools/calibration_file.h \
-    src/tools/render.cpp src/tools/render.h config -type f \
+    src/evaluation src/evidence src/render config -type f \
     ! -name '*.pyc' -print0 |
     sort -z | xargs -0 sha1sum | sha1sum | cut -d' ' -f1
 }

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "../src/core/crc32.h"
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
 #include "tree_compare.h"
@@ -507,7 +508,7 @@ TEST(Integrity, StaleInnerNodesAreNotWritten) {
   tree->updateNode(octomap::point3d(1.1f, 0.1f, 0.1f), 3.0f, /*lazy_eval=*/true);
   const std::string path = scratch.file("stale.ot");
   EXPECT_THROW(saveMap(*tree, path), std::runtime_error);
-  tree->updateInnerNodes();
+  detail::TreeEditing::updateInnerNodes(*tree);
   ASSERT_NO_THROW(saveMap(*tree, path));
   EXPECT_TRUE(compareTrees(*tree, *loadMap(path)));
 }
@@ -537,8 +538,8 @@ TEST(Integrity, SummariesAreDerivedAgainOnReading) {
   const std::string path = scratch.file("deleted.ot");
   ASSERT_NO_THROW(saveMap(*tree, path));
   const auto loaded = loadMap(path);
-  tree->updateInnerNodes();
-  tree->compactPayloads();  // deleteNode leaves the deleted leaf's payload slot in the pool
+  detail::TreeEditing::updateInnerNodes(*tree);
+  detail::TreeEditing::compactPayloads(*tree);  // deleteNode leaves the deleted leaf's payload slot in the pool
   EXPECT_TRUE(compareTrees(*tree, *loaded));
 }
 

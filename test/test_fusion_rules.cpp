@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/fusion_rule.h"
 #include "evidential_octomap/subjective_logic.h"
@@ -268,7 +269,7 @@ TEST(DempsterRule, MapPayloadAgreesWithBeliefSpaceInBothOrders) {
     RandomMasses rnd(200 + num_classes);
     EvidentialOcTree tree(0.2, num_classes, uncappedDempster());
     const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(1.0f, 2.0f, 0.5f));
-    EvidentialOcTreeNode* node = tree.leafForUpdate(key, true);
+    EvidentialOcTreeNode* node = detail::TreeEditing::leafForUpdate(tree, key, true);
     ASSERT_NE(node, nullptr);
     EXPECT_TRUE(tree.payload(node).empty());
     std::vector<float> payload(num_classes, tree.rule().prior());
@@ -280,8 +281,8 @@ TEST(DempsterRule, MapPayloadAgreesWithBeliefSpaceInBothOrders) {
       kernel.push_back(i % 2 ? 1.0 : rnd.uniform(0.0, 1.0));
       fuse(tree.rule(), evidence.back(), kernel.back(), payload.data());
     }
-    tree.setPayload(node, payload.data());
-    tree.updateInnerNodes();
+    detail::TreeEditing::setPayload(tree, node, payload.data());
+    detail::TreeEditing::updateInnerNodes(tree);
     node = tree.search(key);
     ASSERT_NE(node, nullptr);
     ASSERT_TRUE(node->hasSemantics());
@@ -465,7 +466,7 @@ TEST(FloatAbsorption, MillionFusionsIntoOneVoxelFollowTheRule) {
   RandomMasses rnd(400);
   EvidentialOcTree tree(0.2, num_classes);  // the default read-out cap
   const octomap::OcTreeKey key = tree.coordToKey(octomap::point3d(0.0f, 0.0f, 0.0f));
-  EvidentialOcTreeNode* leaf = tree.leafForUpdate(key, true);
+  EvidentialOcTreeNode* leaf = detail::TreeEditing::leafForUpdate(tree, key, true);
   std::vector<float> payload(num_classes, tree.rule().prior());
   test::RefBoundedEvidence reference(num_classes, kMaxStoredLogEvidence,
                                      tree.effectiveEvidenceCap());
@@ -479,7 +480,7 @@ TEST(FloatAbsorption, MillionFusionsIntoOneVoxelFollowTheRule) {
     std::vector<double> increments(num_classes, 0.0);
     tree.rule().contribute(pointOpinion(e), k, num_classes, increments.data());
     tree.rule().add(payload.data(), increments.data(), num_classes);
-    tree.setPayload(leaf, payload.data());
+    detail::TreeEditing::setPayload(tree, leaf, payload.data());
     reference.add(std::vector<long double>(increments.begin(), increments.end()));
     if (n == next_check || n == kFusions) {
       next_check *= 10;

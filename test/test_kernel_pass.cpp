@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
-#include "evidential_octomap/kernel.h"
+#include "evidential_octomap/sparse_kernel.h"
 #include "fast_log1p.h"
 #include "fusion_contributions.h"
 #include "kernel_pass.h"

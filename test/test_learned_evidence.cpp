@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "evidential_octomap/learned_evidence.h"
+#include "evidential_octomap/evidence/learned_evidence.h"
 
 namespace evidential_octomap {
 namespace {

@@ -9,6 +9,7 @@
 #include <tuple>
 #include <vector>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 
 namespace evidential_octomap {
@@ -173,12 +174,12 @@ EvidentialOcTreeNode* leafWithEvidence(EvidentialOcTree* tree, const octomap::Oc
                                        float amount) {
   std::vector<double> row(kClasses, 0.0);
   row[2] = amount;
-  tree->applyUpdates({VoxelUpdate{key, +1, 0}}, row, false);
-  return tree->leafForUpdate(key, false);
+  detail::TreeEditing::applyUpdates(*tree, {VoxelUpdate{key, +1, 0}}, row, false);
+  return detail::TreeEditing::leafForUpdate(*tree, key, false);
 }
 
 void clear(EvidentialOcTree* tree, const octomap::OcTreeKey& key, int times) {
-  for (int i = 0; i < times; ++i) tree->applyUpdates({VoxelUpdate{key, -1}}, {}, false);
+  for (int i = 0; i < times; ++i) detail::TreeEditing::applyUpdates(*tree, {VoxelUpdate{key, -1}}, {}, false);
 }
 
 TEST(ClearingDiscount, LargestPayloadIsGoneAfterTheStatedClearingsNotBefore) {
@@ -196,11 +197,11 @@ TEST(ClearingDiscount, KeepsTheClassSharesAndRaisesUncertainty) {
   EvidentialOcTree tree = streetMap(kClearings);
   const octomap::OcTreeKey key(32768, 32768, 32768);
   std::vector<double> row{1.0, 0.5, 2.0, 0.0};
-  tree.applyUpdates({VoxelUpdate{key, +1, 0}}, row, false);
-  const std::vector<float> before = tree.payload(tree.leafForUpdate(key, false));
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, +1, 0}}, row, false);
+  const std::vector<float> before = tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
   const float u_before = tree.query(key).uncertainty;
   clear(&tree, key, 1);
-  const std::vector<float> after = tree.payload(tree.leafForUpdate(key, false));
+  const std::vector<float> after = tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
   const double keep = tree.config().clearingKeep();
   for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(after[c], before[c] * keep, 1e-6);
   EXPECT_EQ(tree.query(key).label, 2);
@@ -215,7 +216,7 @@ TEST(ClearingDiscount, HitsBetweenClearingsKeepTheClass) {
   row[2] = 1.0;
   for (int round = 0; round < 50; ++round) {
     clear(&tree, key, 3);  // passed through three times, then hit again with its evidence
-    tree.applyUpdates({VoxelUpdate{key, +1, 0}}, row, false);
+    detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, +1, 0}}, row, false);
   }
   EXPECT_EQ(tree.query(key).label, 2);
 }
@@ -224,9 +225,9 @@ TEST(ClearingDiscount, OffLeavesPayloadsUntouched) {
   EvidentialOcTree tree = streetMap(0);
   const octomap::OcTreeKey key(32768, 32768, 32768);
   leafWithEvidence(&tree, key, 1.0f);
-  const std::vector<float> before = tree.payload(tree.leafForUpdate(key, false));
+  const std::vector<float> before = tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
   clear(&tree, key, 100);
-  EXPECT_EQ(tree.payload(tree.leafForUpdate(key, false)), before);
+  EXPECT_EQ(tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false)), before);
 }
 
 TEST(ClearingDiscount, RefusesCountsOutsideItsRange) {

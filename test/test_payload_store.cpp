@@ -99,7 +99,7 @@ TEST(PayloadStore, APayloadCostsItsNonPriorClassesNotC) {
   EXPECT_EQ(store.inUse(), size_t(count));
   // One mask word and two values (12 B) a payload, plus at most one partly used block per size
   // class; the dense store would take 80 B.
-  const size_t slack = 6 * PayloadPool::kBlockSlots * num_classes * sizeof(float);
+  const size_t slack = 6 * SlotPool::kBlockSlots * num_classes * sizeof(float);
   EXPECT_LE(store.bytes(), size_t(count) * 12 + slack);
   EXPECT_GE(store.bytes(), size_t(count) * 12);
 }

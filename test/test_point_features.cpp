@@ -5,7 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#include "evidential_octomap/point_features.h"
+#include "evidential_octomap/evidence/point_features.h"
 
 namespace evidential_octomap {
 namespace {

@@ -18,7 +18,6 @@
 
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
-#include "evidential_octomap/scan_integrator.h"
 #include "synthetic_scene.h"
 #include "tree_compare.h"
 
@@ -373,23 +372,9 @@ TEST(ScanIntegration, PoseOverloadEqualsWorldFrameInsertion) {
   EXPECT_GT(by_pose.numSemanticNodes(), 0u);
 }
 
-TEST(ScanIntegration, IntegratorEqualsTreeInsertion) {
-  SyntheticScene scene;
-  const SyntheticScan scan = scene.defaultScan();
-  SemanticConfig config;
-  config.threads = 1;
-  EvidentialOcTree a(0.2, scene.num_classes, config), b(0.2, scene.num_classes, config);
-  const InsertStats sa = a.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
-  const InsertStats sb =
-      ScanIntegrator(config).integrate(scan.points_W, scan.evidence, scan.origin_W, &b);
-  EXPECT_TRUE(compareTrees(a, b));
-  EXPECT_EQ(sa.voxels_updated, sb.voxels_updated);
-  EXPECT_EQ(sa.semantic_points, sb.semantic_points);
-}
-
 // The integrator keeps its scratch buffers from scan to scan, but not what one dense scan grew
 // them to once sparse scans follow; and what it keeps never changes the map: the same scans
-// through a fresh integrator each give the same map, bit for bit.
+// each through a fresh integrator (setConfig drops it) give the same map, bit for bit.
 TEST(ScanIntegration, KeptScratchIsBoundedAndNeverChangesTheMap) {
   SyntheticScene dense, sparse;
   dense.azimuth_step_deg = dense.elevation_step_deg = 0.15;
@@ -403,7 +388,9 @@ TEST(ScanIntegration, KeptScratchIsBoundedAndNeverChangesTheMap) {
   std::vector<size_t> bytes;
   for (const SyntheticScan& scan : scans) {
     kept.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
-    ScanIntegrator(config).integrate(scan.points_W, scan.evidence, scan.origin_W, &fresh);
+    fresh.setConfig(config);  // drops the integrator: this scan starts from empty scratch
+    ASSERT_EQ(fresh.scratchBytes(), 0u);
+    fresh.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
     bytes.push_back(kept.scratchBytes());
   }
   ASSERT_GT(scans[0].points_W.size(), 40 * scans[1].points_W.size());

@@ -15,6 +15,7 @@
 #include <tuple>
 #include <vector>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "tree_compare.h"
 
@@ -46,7 +47,7 @@ class Sequence {
     if (op < 0.7) return addRandomEvidence();
     if (op < 0.8) return tree_->prune();
     if (op < 0.85) return tree_->expand();
-    if (op < 0.9) return tree_->compactPayloads();
+    if (op < 0.9) return detail::TreeEditing::compactPayloads(*tree_);
     if (op < 0.95) return roundTrip();
     tree_ = std::make_unique<EvidentialOcTree>(*tree_);  // copy constructor
   }
@@ -105,7 +106,7 @@ class Sequence {
       tree_->rule().add(voxel(reference_, u.key).data(), rows.data() + u.increments * num_classes_,
                         num_classes_);
     }
-    tree_->applyUpdates(updates, rows, true);
+    detail::TreeEditing::applyUpdates(*tree_, updates, rows, true);
   }
 
   void handEdit() {
@@ -114,9 +115,9 @@ class Sequence {
     for (int c = 0; c < num_classes_; ++c) {
       if (unit() < 0.2) values[c] += float(unit() * 5.0);
     }
-    tree_->setPayload(tree_->leafForUpdate(key, true), values.data());
+    detail::TreeEditing::setPayload(*tree_, detail::TreeEditing::leafForUpdate(*tree_, key, true), values.data());
     reference_[tupleOf(key)] = values;
-    tree_->updateInnerNodes();
+    detail::TreeEditing::updateInnerNodes(*tree_);
   }
 
   // A map of the same settings with payloads on random voxels (and its dense form).
@@ -129,10 +130,10 @@ class Sequence {
       for (int c = 0; c < num_classes_; ++c) {
         if (unit() < 0.15) values[c] += float(unit() * 4.0);
       }
-      map->setPayload(map->leafForUpdate(key, true), values.data());
+      detail::TreeEditing::setPayload(*map, detail::TreeEditing::leafForUpdate(*map, key, true), values.data());
       (*dense)[tupleOf(key)] = values;
     }
-    map->updateInnerNodes();  // prunes equal siblings: blocks stand for their voxels
+    detail::TreeEditing::updateInnerNodes(*map);  // prunes equal siblings: blocks stand for their voxels
     return map;
   }
 

@@ -15,6 +15,7 @@
 #include <tuple>
 #include <vector>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "synthetic_scene.h"
 #include "tree_compare.h"
@@ -116,7 +117,7 @@ TEST(EvidentialOcTree, BytesPerLeafFreeAndSemantic) {
     tree.setNodeValue(keys[i], values[i], true);
   }
   plain.updateInnerOccupancy();
-  tree.updateInnerNodes();
+  detail::TreeEditing::updateInnerNodes(tree);
   ASSERT_EQ(tree.getNumLeafNodes(), keys.size());
   ASSERT_EQ(tree.size(), plain.size());
   EXPECT_EQ(tree.numSemanticNodes(), 0u);
@@ -131,9 +132,9 @@ TEST(EvidentialOcTree, BytesPerLeafFreeAndSemantic) {
   for (const auto& key : keys) {
     std::vector<float> p(num_classes);
     for (float& v : p) v = evidence(rng);
-    tree.setPayload(tree.search(key), p.data());
+    detail::TreeEditing::setPayload(tree, tree.search(key), p.data());
   }
-  tree.updateInnerNodes();
+  detail::TreeEditing::updateInnerNodes(tree);
   ASSERT_EQ(tree.getNumLeafNodes(), keys.size());
   const double semantic_per_leaf = tree.memoryUsage() / leaves;
   const double extra = semantic_per_leaf - free_per_leaf;
@@ -254,8 +255,8 @@ TEST(InnerNodes, SummariesFollowEditsAndMerges) {
     ++it;
   ASSERT_NE(it, tree->end_leafs());
   const octomap::OcTreeKey key = it.getKey();
-  addToClass(*tree, tree->leafForUpdate(key, false), 1, 1000.0f);
-  tree->updateInnerNodes();
+  addToClass(*tree, detail::TreeEditing::leafForUpdate(*tree, key, false), 1, 1000.0f);
+  detail::TreeEditing::updateInnerNodes(*tree);
   expectInnerSummaries(*tree, "after an edit");
   EXPECT_EQ(tree->query(key, 1).label, 1);  // the richest voxel speaks for the whole map
   auto other = scannedTree("dempster", 2);
@@ -273,7 +274,7 @@ TEST(Pruning, NeverChangesALeafLevelQueryOnAScannedMap) {
     EXPECT_EQ(mismatches(*tree, expected), 0u) << rule << " after prune()";
     tree->expand();
     EXPECT_EQ(mismatches(*tree, expected), 0u) << rule << " after expand()";
-    tree->updateInnerNodes();
+    detail::TreeEditing::updateInnerNodes(*tree);
     EXPECT_EQ(mismatches(*tree, expected), 0u) << rule << " after updateInnerNodes()";
   }
 }
@@ -296,10 +297,10 @@ TEST(Pruning, MergesIdenticalBlocksOnlyAndKeepsTheirAnswers) {
       tree.setNodeValue(key, value, true);
       if (block == 0) continue;
       const std::vector<float>& src = (block == 2 && i == 3) ? nearly : same;
-      tree.setPayload(tree.leafForUpdate(key, true), src.data());
+      detail::TreeEditing::setPayload(tree, detail::TreeEditing::leafForUpdate(tree, key, true), src.data());
     }
   }
-  tree.updateInnerNodes();  // also prunes
+  detail::TreeEditing::updateInnerNodes(tree);  // also prunes
   const auto expected = answersAtAllLeaves(tree);
   ASSERT_EQ(expected.size(), 32u);
   const size_t expanded_size = tree.size();
@@ -316,10 +317,10 @@ TEST(Pruning, MergesIdenticalBlocksOnlyAndKeepsTheirAnswers) {
   EXPECT_EQ(mismatches(tree, expected), 0u);
   // Updating one voxel inside a pruned block splits it and changes only that voxel.
   tree.prune();
-  EvidentialOcTreeNode* split = tree.leafForUpdate(in_block1, false);
+  EvidentialOcTreeNode* split = detail::TreeEditing::leafForUpdate(tree, in_block1, false);
   ASSERT_NE(split, nullptr);
   addToClass(tree, split, 2, 5.0f);
-  tree.updateInnerNodes();
+  detail::TreeEditing::updateInnerNodes(tree);
   const auto after = answersAtAllLeaves(tree);
   size_t changed = 0;
   for (const auto& [key, a] : expected) {
@@ -366,8 +367,8 @@ TEST(TreeUpdate, TwoThreadsBuildTheSameTreeAsOne) {
     for (unsigned batch = 0; batch < 4; ++batch) {  // later batches hit pruned, saturated blocks
       std::vector<double> increments;
       const auto updates = randomUpdates(batch % 2, 40000, 3, &increments);
-      const size_t a = serial.applyUpdates(updates, increments, batch % 2 == 0);
-      const size_t b = parallel.applyUpdates(updates, increments, batch % 2 == 0);
+      const size_t a = detail::TreeEditing::applyUpdates(serial, updates, increments, batch % 2 == 0);
+      const size_t b = detail::TreeEditing::applyUpdates(parallel, updates, increments, batch % 2 == 0);
       EXPECT_EQ(a, b) << rule << " batch " << batch;
       ASSERT_TRUE(compareTrees(serial, parallel)) << rule << " batch " << batch;
     }
@@ -389,7 +390,7 @@ TEST(TreeUpdate, EqualsOctoMapUpdateNodeKeyByKey) {
   EvidentialOcTree batched(0.2, 3, two);
   octomap::OcTree plain(0.2);
   for (int round = 0; round < 4; ++round) {
-    batched.applyUpdates(updates, increments, false);
+    detail::TreeEditing::applyUpdates(batched, updates, increments, false);
     std::map<KeyTuple, int> merged;  // hit wins over miss, as in OctoMap's computeUpdate
     for (const auto& u : updates) {
       if (u.occupancy == 0) continue;
@@ -564,8 +565,8 @@ TEST(EvidentialOcTree, CopyIsEqualAndIndependent) {
     ASSERT_NE(it, tree->end_leafs());
     const octomap::OcTreeKey key = it.getKey();
     const VoxelOpinion before = copy.query(key);
-    addToClass(*tree, tree->leafForUpdate(key, false), 2, 50.0f);
-    tree->updateInnerNodes();
+    addToClass(*tree, detail::TreeEditing::leafForUpdate(*tree, key, false), 2, 50.0f);
+    detail::TreeEditing::updateInnerNodes(*tree);
     EXPECT_EQ(copy.query(key).belief, before.belief);
     EXPECT_FALSE(compareTrees(*tree, copy));
   }
@@ -597,7 +598,7 @@ TEST(EvidentialOcTree, DeleteNodeThenCompactKeepsCountsConsistent) {
     ++deleted;
   }
   ASSERT_EQ(deleted, 20u);
-  tree->compactPayloads();
+  detail::TreeEditing::compactPayloads(*tree);
   size_t counted = 0;  // semantic leaves; inner nodes name one of their payloads
   for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
     if (it->hasSemantics()) {

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 
 namespace evidential_octomap {
@@ -29,7 +30,7 @@ inline void addToClass(EvidentialOcTree& tree, EvidentialOcTreeNode* leaf, int c
   std::vector<float> p = tree.payload(leaf);
   if (p.empty()) p.assign(tree.numClasses(), tree.rule().prior());
   p[c] += amount;
-  tree.setPayload(leaf, p.data());
+  detail::TreeEditing::setPayload(tree, leaf, p.data());
 }
 
 namespace detail {

@@ -1,7 +1,7 @@
 // Everything a user of the map library needs, in one include (as octomap/octomap.h is for
 // OctoMap): the tree and its settings, the fusion rules' read-out, files, class tables and the
-// evidence conversions. Evaluation and evidence-model headers (metrics.h, paired_bootstrap.h,
-// learned_evidence.h, point_features.h) are for the tools and are included on their own.
+// evidence conversions. The evaluation/ and evidence/ headers belong to libraries of their own
+// (evidential_octomap::evaluation, evidential_octomap::evidence) and are included on their own.
 #pragma once
 
 #include <octomap/octomap.h>

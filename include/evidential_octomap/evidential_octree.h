@@ -32,6 +32,10 @@ struct SubtreeSeed;
 struct DroppedRows;
 class LogOddsTable;
 struct NodeCoding;
+struct VoxelUpdate;
+namespace detail {
+class TreeEditing;
+}
 
 class EvidentialOcTreeNode : public octomap::OcTreeNode {
  public:
@@ -61,14 +65,6 @@ class EvidentialOcTreeNode : public octomap::OcTreeNode {
   void deleteLeafChildren();  // all eight children (leaves) and the child array
 
   uint32_t payload_ = kNoPayload;
-};
-
-// One voxel's share of a scan: an occupancy update and/or a row of semantic increments.
-struct VoxelUpdate {
-  static constexpr uint32_t kNoIncrements = 0xFFFFFFFFu;
-  octomap::OcTreeKey key;
-  int8_t occupancy = 0;                 // -1 miss, +1 hit, 0 none
-  uint32_t increments = kNoIncrements;  // row of C values in the increments array
 };
 
 // What one call of insertSemanticScan did.
@@ -181,31 +177,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // Leaves that hold semantic evidence (each owns one payload slot).
   size_t numSemanticNodes() const;
 
-  // --- editing (used by the integrator, merge and readers) ----------------------------------
-  // Leaf at full depth for `key`, expanding pruned nodes; created (log-odds 0) when missing and
-  // `create`, else nullptr.
-  EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);
-  // Sets the leaf's C floats (allocating its payload if it had none). The summaries above it
-  // follow at updateInnerNodes(). Throws std::invalid_argument for an inner node.
-  void setPayload(EvidentialOcTreeNode* leaf, const float* values);
-  void clearPayload(EvidentialOcTreeNode* node);
-  // Applies a whole scan in one pass over the tree: updates are sorted in Morton order (so every
-  // subtree is visited once), missing leaves are created for occupancy updates (and for
-  // semantic ones when `create_semantic_leaves`), pruned blocks are split only where something
-  // changes, and only the inner nodes above touched leaves are recomputed (and pruned).
-  // `increments` holds C values per row. Subtrees are updated in parallel (config().threads).
-  // Returns the number of leaves whose payload changed.
-  size_t applyUpdates(std::vector<VoxelUpdate> updates, const std::vector<double>& increments,
-                      bool create_semantic_leaves);
-  // The same for updates already sorted in Morton order (z, y, x bits interleaved, OctoMap's
-  // child order) with one update per key.
-  size_t applySortedUpdates(const VoxelUpdate* updates, size_t count,
-                            const std::vector<double>& increments, bool create_semantic_leaves);
-  // Recomputes inner occupancy and inner semantic summaries bottom-up, then prunes.
-  // Inner summary: the payload of the child holding the most evidence (largest sum; the first
-  // such child on ties), i.e. of the leaf reached by following the richest child downwards. It
-  // is not copied: the inner node names that leaf's slot.
-  void updateInnerNodes();
+  // --- maps as a whole ------------------------------------------------------------------
   // Fuses another map of the same resolution, C and rule into this one. Occupancy log-odds add
   // (clamped) and payloads add, so a.merge(b) and b.merge(a) give equal maps.
   void merge(const EvidentialOcTree& other);
@@ -221,9 +193,6 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   void setClampingThresLog(float min_log_odds, float max_log_odds);
   // Clamps every node's log-odds to the current bounds, then recomputes inner nodes and prunes.
   void clampOccupancy();
-  // Rebuilds the payload store from the nodes that are still in the tree (after deleteNode),
-  // each payload in the smallest slot that holds it.
-  void compactPayloads();
 
   // --- OctoMap overrides ----------------------------------------------------------------
   bool isNodeCollapsible(const EvidentialOcTreeNode* node) const override;
@@ -253,10 +222,19 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   struct UpdateBatch;
   struct UpdateTask;
   struct TopPass;
-  // The integrator hands a scan over subtree by subtree (applySubtrees).
-  friend class ScanIntegrator;
+  friend class detail::TreeEditing;  // the editing calls below, for readers, tests and fuzzing
 
   void setNumClasses(int num_classes);
+  // Editing: detail/tree_editing.h says what each does.
+  EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);
+  void setPayload(EvidentialOcTreeNode* leaf, const float* values);
+  void clearPayload(EvidentialOcTreeNode* node);
+  size_t applyUpdates(std::vector<VoxelUpdate> updates, const std::vector<double>& increments,
+                      bool create_semantic_leaves);
+  size_t applySortedUpdates(const VoxelUpdate* updates, size_t count,
+                            const std::vector<double>& increments, bool create_semantic_leaves);
+  void updateInnerNodes();
+  void compactPayloads();
   void checkCompatible(const EvidentialOcTree& other, const char* what) const;
   // into += from - prior per class, saturating at FLT_MAX (crafted files may hold huge values).
   void addPayload(float* into, const float* from) const;
@@ -285,10 +263,12 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // "" when an inner node's log-odds are its children's maximum (what updateInnerNode gives it),
   // else what differs. (Its summary is derived from the children and cannot differ.)
   std::string innerNodeProblem(const EvidentialOcTreeNode* node) const;
-  // The batched update (tree_update.cpp): the subtrees `source` has updates for, in parallel;
+  // The batched update (batched_update.cpp): the subtrees `source` has updates for, in parallel;
   // rows for voxels the map has no leaf for go to `dropped` (one per thread) when given.
   size_t applySubtrees(SubtreeSource& source, bool create_semantic_leaves, int threads,
                        std::vector<DroppedRows>* dropped);
+  // The rows another map dropped (voxels it has no leaf for), added here in one batch.
+  void addDroppedRows(std::vector<DroppedRows>& dropped);
   void applyTopRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
                       const SubtreeSeed* begin, const SubtreeSeed* end, TopPass& pass, Edit& edit);
   size_t applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,

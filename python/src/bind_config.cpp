@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "bindings.h"
-#include "calibration_file.h"
+#include "evidential_octomap/calibration_file.h"
 #include "evidential_octomap/settings.h"
 #include "evidential_octomap/subjective_logic.h"
 
@@ -47,7 +47,7 @@ void bindConfig(nb::module_& m) {
         setting.field);
   }
   m.attr("EVIDENCE_MAGNITUDE") = kEvidenceMagnitude;
-  m.def("read_calibration", &tools::readCalibrationCap, nb::arg("path"),
+  m.def("read_calibration", &evidential_octomap::readCalibrationCap, nb::arg("path"),
         "The dempster read-out cap of a file written by `evidential_octomap calibrate`: "
         "SemanticConfig(evidence_cap=read_calibration(path)). Raises RuntimeError (naming the "
         "file and line) for an unreadable or invalid file.");

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "bindings.h"
-#include "evidential_octomap/learned_evidence.h"
+#include "evidential_octomap/evidence/learned_evidence.h"
 #include "evidential_octomap/subjective_logic.h"
 
 namespace evidential_octomap::python {

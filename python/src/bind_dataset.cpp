@@ -4,14 +4,14 @@
 #include <nanobind/stl/vector.h>
 
 #include "bindings.h"
-#include "dataset.h"
-#include "evidence_sources.h"
+#include "evidential_octomap/evaluation/dataset.h"
+#include "evidential_octomap/evidence/evidence_sources.h"
 
 namespace evidential_octomap::python {
 
 namespace {
-using tools::Dataset;
-using tools::Scan;
+using evidential_octomap::Dataset;
+using evidential_octomap::Scan;
 
 Array<double> matrixArray(const Eigen::Matrix4d& T) {
   std::vector<double> values(16);
@@ -34,15 +34,15 @@ nb::object classArray(const std::vector<int>& classes) {
 
 Array<float> deriveEvidence(const Scan& scan, int num_classes, const std::string& source,
                             float magnitude, int knn_k, double knn_radius) {
-  tools::EvidenceOptions options;
-  options.source = tools::evidenceSourceFromName(source);
+  evidential_octomap::EvidenceOptions options;
+  options.source = evidential_octomap::evidenceSourceFromName(source);
   options.magnitude = magnitude;
   options.knn_k = knn_k;
   options.knn_radius = knn_radius;
   std::vector<float> evidence;
   {
     nb::gil_scoped_release release;
-    evidence = tools::deriveEvidence(scan, 0, options, num_classes, nullptr);
+    evidence = evidential_octomap::deriveEvidence(scan, 0, options, num_classes, nullptr);
   }
   return toNumpy(std::move(evidence), {scan.size(), size_t(num_classes)});
 }
@@ -123,9 +123,9 @@ void bindDataset(nb::module_& m) {
           nb::arg("i"), "Loads scan i; raises RuntimeError naming a malformed file.")
       .def("__len__", &Dataset::size);
 
-  const tools::EvidenceOptions defaults;
+  const evidential_octomap::EvidenceOptions defaults;
   m.def("derive_evidence", &deriveEvidence, nb::arg("scan"), nb::arg("num_classes"),
-        nb::arg("source") = tools::evidenceSourceName(defaults.source),
+        nb::arg("source") = evidential_octomap::evidenceSourceName(defaults.source),
         nb::arg("magnitude") = defaults.magnitude, nb::arg("knn_k") = defaults.knn_k,
         nb::arg("knn_radius") = defaults.knn_radius,
         "(N, C) evidence of a scan: 'file' (the dataset's evidence files), or derived from its "
@@ -134,7 +134,7 @@ void bindDataset(nb::module_& m) {
   m.def(
       "evidence_is_derived",
       [](const std::string& source) {
-        return tools::derivedFromHardLabels(tools::evidenceSourceFromName(source));
+        return evidential_octomap::derivedFromHardLabels(evidential_octomap::evidenceSourceFromName(source));
       },
       nb::arg("source"), "Whether a source derives evidence from hard labels (label it so).");
 }

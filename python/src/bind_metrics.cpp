@@ -5,7 +5,7 @@
 #include <nanobind/stl/vector.h>
 
 #include "bindings.h"
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 
 namespace evidential_octomap::python {
 

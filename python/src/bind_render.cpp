@@ -1,10 +1,10 @@
-// The CLI's top-down PNG renders (src/tools/render.cpp, OpenCV), so the Python package draws its
+// The CLI's top-down PNG renders (src/render/render.cpp, OpenCV), so the Python package draws its
 // pictures with the one renderer. Compiled only when OpenCV is found (see python/CMakeLists.txt).
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
 #include "bindings.h"
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 #include "render.h"
 
 namespace evidential_octomap::python {

@@ -1,7 +1,7 @@
 """A small evidential MLP in numpy: forward, the EDL loss of Sensoy et al. 2018 (NeurIPS,
 "Evidential Deep Learning to Quantify Classification Uncertainty", eq. 5 plus the annealed KL
 term) with its gradient, and Adam. Development-only; the C++ side only runs the forward pass
-(src/core/learned_evidence.cpp)."""
+(src/evidence/learned_evidence.cpp)."""
 import numpy as np
 
 

@@ -7,10 +7,10 @@ Debian's python3-numpy is enough); the map, the CLI and the ROS player only read
     /usr/bin/python3 scripts/learned_evidence/train.py          # from the repository root
 
 1. `evidential_octomap features` (the C++ CLI; build it first) writes the per-point features,
-   so training and inference share one feature implementation (src/core/point_features.cpp);
+   so training and inference share one feature implementation (src/evidence/point_features.cpp);
 2. each fold trains an MLP F -> 64 -> 32 -> C with the EDL loss of Sensoy et al. 2018 (MSE form,
    KL to Dir(1) annealed over the first epochs), softplus evidence;
-3. writes config/learned/semantickitti.model (read by src/core/learned_evidence.cpp), the test
+3. writes config/learned/semantickitti.model (read by src/evidence/learned_evidence.cpp), the test
    fixture test/fixtures/learned_evidence_points.txt (features and this script's evidence of a
    few fixed points) and the held-out report build/learned_evidence/report.md.
 """

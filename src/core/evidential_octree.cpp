@@ -1,5 +1,5 @@
 // EvidentialOcTree in ColorOcTree.cpp's order: node part, tree part, static member. The batched
-// scan update is in tree_update.cpp, the file format in ot_format.cpp.
+// scan update is in batched_update.cpp, the file format in ot_format.cpp.
 #include "evidential_octomap/evidential_octree.h"
 
 #include <algorithm>
@@ -11,9 +11,11 @@
 #include <utility>
 
 #include "evidential_octomap/safe_key.h"
-#include "evidential_octomap/scan_integrator.h"
 #include "node_allocator.h"
 #include "payload_store.h"
+#include "phase_timer.h"
+#include "scan_integrator.h"
+#include "subtree_source.h"
 #include "tree_edit.h"
 
 namespace evidential_octomap {
@@ -161,7 +163,21 @@ InsertStats EvidentialOcTree::insertSemanticScan(const octomap::Pointcloud& poin
   if (!problem.empty()) throw std::invalid_argument(problem);
   if (unobserved) checkCompatible(*unobserved, "unobserved evidence");
   if (!integrator_) integrator_ = std::make_unique<ScanIntegrator>(config_);
-  const InsertStats stats = integrator_->integrate(points_W, evidence, origin_W, this, unobserved);
+  InsertStats stats;
+  // 1-2. Occupancy rays and semantic points, grouped by subtree (reads the map only).
+  const bool keep = unobserved && !config_.kernel_creates_leaves;
+  SubtreeSource* subtrees = integrator_->prepare(points_W, evidence, origin_W, *this, keep, &stats);
+  if (subtrees) {
+    // 3. One pass over the tree, subtree by subtree in parallel: each subtree's kernel rows (the
+    //    one kernel loop), merged with its ray voxels, then its leaves and inner nodes.
+    PhaseTimer timer;
+    std::vector<DroppedRows> dropped;
+    stats.voxels_updated = applySubtrees(*subtrees, config_.kernel_creates_leaves,
+                                         integrator_->threads(), keep ? &dropped : nullptr);
+    if (keep) unobserved->addDroppedRows(dropped);
+    timer.stop(&stats.ms_update, &stats.cpu_ms_update);
+    integrator_->finish(&stats);
+  }
   followEvidence(evidence);
   return stats;
 }

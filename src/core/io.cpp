@@ -1,3 +1,4 @@
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/io.h"
 
 #include <sys/stat.h>
@@ -102,7 +103,7 @@ std::unique_ptr<EvidentialOcTree> loadBinaryOccupancy(const std::string& path, i
   if (size > 0) {
     tree->readBinaryData(in);
     if (in.fail()) throw std::runtime_error(path + ": truncated or corrupt data");
-    tree->updateInnerNodes();
+    detail::TreeEditing::updateInnerNodes(*tree);
   }
   return tree;
 }

@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "evidential_octomap/kernel.h"
+#include "evidential_octomap/sparse_kernel.h"
 #include "fusion_contributions.h"
-#include "subtree_updates.h"
+#include "subtree_source.h"
 
 namespace evidential_octomap {
 

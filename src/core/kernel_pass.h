@@ -1,12 +1,12 @@
 // The one kernel loop (docs/design.md): every kept point adds its rule's contribution, weighted by the
 // sparse kernel k(d, L_i), to each voxel within its support, aggregated per voxel for the scan.
-// Run per subtree of the tree update (subtree_updates.h), so rows exist only for the subtree at
+// Run per subtree of the tree update (subtree_source.h), so rows exist only for the subtree at
 // hand and threads never share one.
 //
 // The kernel is not recomputed per (point, voxel): d^2 splits into per-axis terms that are
 // computed once per point and axis offset, and sigma0 k'(r) is looked up at r^2 = d^2 / L^2 in a
 // table of 4096 steps with linear interpolation. The geometry stays exact (no quantised point
-// positions or supports); the table's error is at most 5e-7 sigma0 (test_kernel checks it), so
+// positions or supports); the table's error is at most 5e-7 sigma0 (test_sparse_kernel checks it), so
 // the map differs from direct evaluation by at most that error times each contribution's
 // derivative in k (plus dempster's fastLog1p, 3e-14 relative). Rows are computed only for voxels
 // the map keeps (KernelRows::mask). Private to the core.
@@ -21,7 +21,7 @@
 
 namespace evidential_octomap {
 
-// sigma0 k'(r) of the sparse kernel (kernel.h) as a function of s = r^2, tabulated.
+// sigma0 k'(r) of the sparse kernel (sparse_kernel.h) as a function of s = r^2, tabulated.
 class KernelTable {
  public:
   static constexpr int kSteps = 4096;

@@ -1,3 +1,4 @@
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/map_editing.h"
 
 #include <algorithm>
@@ -71,14 +72,14 @@ uint32_t clearBox(EvidentialOcTree* tree, const octomap::point3d& min, const oct
   uint32_t cleared = 0;
   for (const auto& target : targets) {
     EvidentialOcTreeNode* node = target.second == max_depth
-                                     ? tree->leafForUpdate(target.first, false)
+                                     ? detail::TreeEditing::leafForUpdate(*tree, target.first, false)
                                      : tree->search(target.first, target.second);
     if (!node) continue;
     node->setLogOdds(tree->getClampingThresMinLog());
-    tree->clearPayload(node);
+    detail::TreeEditing::clearPayload(*tree, node);
     ++cleared;
   }
-  tree->updateInnerNodes();
+  detail::TreeEditing::updateInnerNodes(*tree);
   return cleared;
 }
 

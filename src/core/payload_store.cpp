@@ -22,9 +22,9 @@ void PayloadStore::reset(int num_classes, float prior) {
   mask_words_ = (num_classes + 31) / 32;
   pools_.clear();
   for (int cap = 1; cap < num_classes; cap *= 2) {
-    pools_.push_back(std::make_unique<PayloadPool>(mask_words_ + cap));
+    pools_.push_back(std::make_unique<SlotPool>(mask_words_ + cap));
   }
-  pools_.push_back(std::make_unique<PayloadPool>(num_classes));  // dense
+  pools_.push_back(std::make_unique<SlotPool>(num_classes));  // dense
 }
 
 int PayloadStore::capacity(int size_class) const {
@@ -105,10 +105,10 @@ size_t PayloadStore::bytes() const {
 
 // --- Local -----------------------------------------------------------------------------------
 
-PayloadPool::Local& PayloadStore::Local::pool(int size_class) {
+SlotPool::Local& PayloadStore::Local::pool(int size_class) {
   auto& local = locals_[size_class];
   if (!local)
-    local = std::make_unique<PayloadPool::Local>(store_->pools_[size_class].get(), batch_);
+    local = std::make_unique<SlotPool::Local>(store_->pools_[size_class].get(), batch_);
   return *local;
 }
 
@@ -142,7 +142,7 @@ uint32_t PayloadStore::Local::store(uint32_t ref, const float* values) {
 uint32_t PayloadStore::Local::copy(uint32_t ref) {
   const int size_class = sizeClassOf(ref);
   const uint32_t to = allocate(size_class);
-  PayloadPool& pool = *store_->pools_[size_class];
+  SlotPool& pool = *store_->pools_[size_class];
   std::memcpy(pool.slot(indexOf(to)), pool.slot(indexOf(ref)), sizeof(float) * pool.width());
   return to;
 }

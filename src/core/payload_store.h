@@ -1,6 +1,6 @@
 // The semantic payloads of a tree, sparse: a slot holds only the classes whose value differs
 // from the rule's prior (a class bitmask, then those values in class order), in size classes of
-// 1, 2, 4, 8, ... values, one PayloadPool each; the last size class holds all C values densely
+// 1, 2, 4, 8, ... values, one SlotPool each; the last size class holds all C values densely
 // (no mask). A payload that outgrows its slot moves to a larger size class. A reference names
 // the size class (top 4 bits) and the slot in its pool. Readers decode a payload into C floats,
 // which are bit for bit what a dense slot would hold. Private to the core.
@@ -12,7 +12,7 @@
 #include <memory>
 #include <vector>
 
-#include "payload_pool.h"
+#include "slot_pool.h"
 
 namespace evidential_octomap {
 
@@ -43,7 +43,7 @@ class PayloadStore {
   // Bytes held by the pools (slots, free lists, directories).
   size_t bytes() const;
 
-  // One thread's allocations (PayloadPool::Local per size class, made when first used).
+  // One thread's allocations (SlotPool::Local per size class, made when first used).
   class Local {
    public:
     Local(PayloadStore* store, uint32_t batch) : store_(store), batch_(batch) {}
@@ -58,12 +58,12 @@ class PayloadStore {
     void flush();
 
    private:
-    PayloadPool::Local& pool(int size_class);
+    SlotPool::Local& pool(int size_class);
     uint32_t allocate(int size_class);
 
     PayloadStore* store_;
     uint32_t batch_;
-    std::array<std::unique_ptr<PayloadPool::Local>, kMaxSizeClasses> locals_;
+    std::array<std::unique_ptr<SlotPool::Local>, kMaxSizeClasses> locals_;
   };
 
  private:
@@ -86,7 +86,7 @@ class PayloadStore {
   int num_classes_ = 1;
   float prior_ = 0.0f;
   int mask_words_ = 1;  // 32-bit words of the class mask of a sparse slot
-  std::vector<std::unique_ptr<PayloadPool>> pools_;
+  std::vector<std::unique_ptr<SlotPool>> pools_;
 };
 
 }  // namespace evidential_octomap

@@ -1,17 +1,17 @@
-#include "evidential_octomap/scan_integrator.h"
+#include "scan_integrator.h"
 
 #include <omp.h>
-#include <time.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "evidential_octomap/safe_key.h"
 #include "evidential_octomap/subjective_logic.h"
 #include "kept_buffers.h"
+#include "phase_timer.h"
 #include "kernel_pass.h"
 #include "morton.h"
 #include "radix_sort.h"
@@ -21,26 +21,6 @@
 
 namespace evidential_octomap {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-double processCpuMs() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
-
-// Wall and process CPU time of one phase.
-struct PhaseTimer {
-  Clock::time_point wall = Clock::now();
-  double cpu = processCpuMs();
-  void stop(double* wall_ms, double* cpu_ms) {
-    *wall_ms = msSince(wall);
-    *cpu_ms = processCpuMs() - cpu;
-  }
-};
 
 // Validates everything before the map is touched: a bad message changes nothing.
 void validateInput(const octomap::Pointcloud& points_W, const std::vector<float>& evidence,
@@ -59,22 +39,6 @@ void validateInput(const octomap::Pointcloud& points_W, const std::vector<float>
   }
 }
 
-// The rows the map dropped (voxels without a leaf), added to `unobserved` in one batch.
-void keepUnobserved(std::vector<DroppedRows>& dropped, int num_classes,
-                    EvidentialOcTree* unobserved) {
-  std::vector<VoxelUpdate> updates;
-  std::vector<double> rows;
-  for (DroppedRows& d : dropped) {
-    const uint32_t offset = static_cast<uint32_t>(rows.size() / num_classes);
-    for (VoxelUpdate u : d.updates) {
-      u.increments += offset;
-      updates.push_back(u);
-    }
-    rows.insert(rows.end(), d.rows.begin(), d.rows.end());
-  }
-  unobserved->applyUpdates(std::move(updates), rows, true);
-}
-
 }  // namespace
 
 // Buffers of one scan, kept for the next: clearing them costs nothing, allocating and
@@ -88,6 +52,7 @@ struct ScanIntegrator::Scratch {
   SemanticScratch semantic;
   SemanticPoints points;  // after threshold and down-sampling
   std::vector<KernelPoint> kernel_points;
+  std::optional<KernelPass> kernel;  // of the scan being inserted
   ScanSubtrees subtrees;
 
   size_t bytes() const;
@@ -128,25 +93,29 @@ ScanIntegrator::~ScanIntegrator() = default;
 
 size_t ScanIntegrator::scratchBytes() const { return scratch_->bytes(); }
 
-InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
-                                      const std::vector<float>& evidence,
-                                      const octomap::point3d& origin_W, EvidentialOcTree* tree,
-                                      EvidentialOcTree* unobserved) {
-  const int num_classes = tree->numClasses();
+int ScanIntegrator::threads() const {
+  return config_.threads > 0 ? config_.threads : omp_get_max_threads();
+}
+
+SubtreeSource* ScanIntegrator::prepare(const octomap::Pointcloud& points_W,
+                                       const std::vector<float>& evidence,
+                                       const octomap::point3d& origin_W,
+                                       const EvidentialOcTree& tree, bool keep_unobserved,
+                                       InsertStats* stats) {
+  const int num_classes = tree.numClasses();
   const size_t n = points_W.size();
-  InsertStats stats;
-  stats.points_in = n;
+  stats->points_in = n;
   validateInput(points_W, evidence, num_classes);
   // A kernel the machine cannot afford is refused rather than left to run for hours or to
   // exhaust memory (SemanticConfig::kMaxSupportLeaves).
-  const std::string support_problem = config_.supportProblem(tree->getResolution());
+  const std::string support_problem = config_.supportProblem(tree.getResolution());
   if (!support_problem.empty()) throw std::invalid_argument(support_problem);
   octomap::OcTreeKey origin_key;
-  if (!safeCoordToKey(*tree, origin_W, &origin_key)) {
+  if (!safeCoordToKey(tree, origin_W, &origin_key)) {
     throw std::invalid_argument("sensor origin is not finite or outside the map's range");
   }
   Scratch& scratch = *scratch_;
-  const int threads = config_.threads > 0 ? config_.threads : omp_get_max_threads();
+  const int threads = this->threads();
 
   // 1. Occupancy: ray casting with OctoMap's semantics into voxel bricks (ray_casting.h).
   PhaseTimer timer;
@@ -157,56 +126,50 @@ InsertStats ScanIntegrator::integrate(const octomap::Pointcloud& points_W,
   octomap::OcTreeKey key;
   for (size_t i = 0; i < n; ++i) {
     const octomap::point3d& p = points_W.getPoint(i);
-    if (!safeCoordToKey(*tree, p, &key)) {  // NaN, inf or beyond the map
-      ++stats.points_skipped;
+    if (!safeCoordToKey(tree, p, &key)) {  // NaN, inf or beyond the map
+      ++stats->points_skipped;
       continue;
     }
     cloud.push_back(p);
     if (config_.max_range > 0.0 && (p - origin_W).norm() > config_.max_range) {
-      ++stats.points_beyond_range;
+      ++stats->points_beyond_range;
       continue;
     }
     raw.positions.push_back(p);
     raw.evidence.push_back(&evidence[i * num_classes]);
   }
-  if (cloud.empty()) return stats;
+  if (cloud.empty()) return nullptr;
   scratch.bricks.resize(threads);
-  castRays(*tree, cloud, origin_W, config_.max_range, config_.discretize, config_.fast_free_space,
+  castRays(tree, cloud, origin_W, config_.max_range, config_.discretize, config_.fast_free_space,
            &scratch.bricks);
-  timer.stop(&stats.ms_occupancy, &stats.cpu_ms_occupancy);
+  timer.stop(&stats->ms_occupancy, &stats->cpu_ms_occupancy);
 
   // 2. Semantic points: percentile threshold, down-sampling, opinions and supports.
   timer = PhaseTimer();
-  const bool uncertainty_kernel = tree->rule().usesUncertaintyKernel();
-  selectSemanticPoints(raw, num_classes, config_,
-                       uncertainty_kernel && config_.effectiveThreshold(), tree->getResolution(),
-                       threads, &scratch.semantic, &scratch.points, &stats);
-  stats.semantic_points = scratch.points.positions.size();
-  const KernelPass kernel(config_, *tree);
+  const bool uncertainty_kernel = tree.rule().usesUncertaintyKernel();
+  const PointSelection selection = PointSelection::of(
+      config_, num_classes, uncertainty_kernel && config_.effectiveThreshold(), tree.getResolution());
+  selectSemanticPoints(raw, selection, threads, &scratch.semantic, &scratch.points, stats);
+  stats->semantic_points = scratch.points.positions.size();
+  // The subtrees run the kernel loop later, inside the tree's update pass: the kernel outlives
+  // this call, in the scratch.
+  const KernelPass& kernel = scratch.kernel.emplace(config_, tree);
   kernel.preparePoints(scratch.points, threads, &scratch.kernel_points);
-  const bool keep = unobserved && !config_.kernel_creates_leaves;
   using Targets = ScanSubtrees::Targets;
-  const Targets targets = config_.semantic_occupied_only          ? Targets::kOccupied
-                          : config_.kernel_creates_leaves || keep ? Targets::kEverywhere
-                                                                  : Targets::kKept;
-  scratch.subtrees.build(*tree, scratch.bricks[0], scratch.points, scratch.kernel_points, kernel,
+  const Targets targets = config_.semantic_occupied_only                     ? Targets::kOccupied
+                          : config_.kernel_creates_leaves || keep_unobserved ? Targets::kEverywhere
+                                                                             : Targets::kKept;
+  scratch.subtrees.build(tree, scratch.bricks[0], scratch.points, scratch.kernel_points, kernel,
                          threads, targets);
-  timer.stop(&stats.ms_kernel, &stats.cpu_ms_kernel);
+  timer.stop(&stats->ms_kernel, &stats->cpu_ms_kernel);
+  return &scratch.subtrees;
+}
 
-  // 3. One pass over the tree, subtree by subtree in parallel: each subtree's kernel rows (the
-  //    one kernel loop), merged with its ray voxels, then its leaves and inner nodes.
-  timer = PhaseTimer();
-  std::vector<DroppedRows> dropped;
-  stats.voxels_updated = tree->applySubtrees(scratch.subtrees, config_.kernel_creates_leaves,
-                                             threads, keep ? &dropped : nullptr);
-  if (keep) keepUnobserved(dropped, num_classes, unobserved);
-  timer.stop(&stats.ms_update, &stats.cpu_ms_update);
-  // The kernel loop ran inside the update pass: its CPU time belongs to the kernel phase.
-  const double kernel_loop = scratch.subtrees.kernelCpuMs();
-  stats.cpu_ms_kernel += kernel_loop;
-  stats.cpu_ms_update = std::max(0.0, stats.cpu_ms_update - kernel_loop);
-  scratch.releaseExcess();
-  return stats;
+void ScanIntegrator::finish(InsertStats* stats) {
+  const double kernel_loop = scratch_->subtrees.kernelCpuMs();
+  stats->cpu_ms_kernel += kernel_loop;
+  stats->cpu_ms_update = std::max(0.0, stats->cpu_ms_update - kernel_loop);
+  scratch_->releaseExcess();
 }
 
 }  // namespace evidential_octomap

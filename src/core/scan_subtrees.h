@@ -1,4 +1,4 @@
-// One scan's updates, subtree by subtree (subtree_updates.h): the voxels its rays crossed or
+// One scan's updates, subtree by subtree (subtree_source.h): the voxels its rays crossed or
 // ended in (VoxelBricks) merged in Morton order with the kernel rows that its semantic points
 // give the subtree (KernelPass), computed when the tree update asks for the subtree. Private to
 // the core.
@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "kernel_pass.h"
-#include "subtree_updates.h"
+#include "subtree_source.h"
 #include "voxel_bricks.h"
 
 namespace evidential_octomap {

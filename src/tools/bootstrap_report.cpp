@@ -76,7 +76,7 @@ std::string BootstrapReport::describe() const {
     << settings_.block_size << " m × " << settings_.block_size
     << " m (world x-y) with replacement, the same draw for both rows; seed " << settings_.seed
     << "; " << 100.0 * (1.0 - settings_.alpha)
-    << " % percentile intervals (include/evidential_octomap/paired_bootstrap.h)";
+    << " % percentile intervals (include/evidential_octomap/evaluation/paired_bootstrap.h)";
   return s.str();
 }
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "evidential_octomap/paired_bootstrap.h"
+#include "evidential_octomap/evaluation/paired_bootstrap.h"
 
 namespace evidential_octomap::tools {
 

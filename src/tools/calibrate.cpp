@@ -13,9 +13,9 @@
 #include <sstream>
 
 #include "commands.h"
-#include "dataset.h"
+#include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/io.h"
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 #include "pipeline.h"
 
 namespace evidential_octomap::tools {

@@ -1,7 +1,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "calibration_file.h"
+#include "evidential_octomap/calibration_file.h"
 #include "commands.h"
 #include "evidential_octomap/settings.h"
 

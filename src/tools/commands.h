@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "evidence_sources.h"
+#include "evidential_octomap/evidence/evidence_sources.h"
 #include "evidential_octomap/semantic_config.h"
 
 namespace evidential_octomap::tools {

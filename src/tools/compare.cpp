@@ -11,7 +11,7 @@
 #include "bootstrap_report.h"
 #include "commands.h"
 #include "compare_variants.h"
-#include "dataset.h"
+#include "evidential_octomap/evaluation/dataset.h"
 #include "pipeline.h"
 #include "report.h"
 #include "synthetic.h"
@@ -349,7 +349,7 @@ std::string compareMarkdown(const CompareOptions& o, const CompareResults& resul
                             const std::string& rellis_note) {
   std::ostringstream md;
   md << "# compare: fusion rules and the Table II ablation on the same queries\n\n"
-     << "Metrics (include/evidential_octomap/metrics.h), the same queries (GT-labelled points) "
+     << "Metrics (include/evidential_octomap/evaluation/metrics.h), the same queries (GT-labelled points) "
         "for every row: mIoU / Acc over **all** queries (a query whose voxel holds no evidence "
         "counts as wrong) and over labelled ones; sem. cov. = share of queries whose voxel holds "
         "evidence (the paper's O.Acc); occ. cov. = share whose voxel is occupied; Brier = mean "

@@ -6,8 +6,8 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "dataset.h"
-#include "evidential_octomap/point_features.h"
+#include "evidential_octomap/evaluation/dataset.h"
+#include "evidential_octomap/evidence/point_features.h"
 #include "pipeline.h"
 #include "report.h"
 

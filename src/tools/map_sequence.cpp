@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "commands.h"
-#include "dataset.h"
+#include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/io.h"
 #include "pipeline.h"
 #include "quality_plot.h"

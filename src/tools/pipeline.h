@@ -6,12 +6,12 @@
 #include <string>
 #include <vector>
 
-#include "dataset.h"
-#include "evidence_sources.h"
+#include "evidential_octomap/evaluation/dataset.h"
+#include "evidential_octomap/evidence/evidence_sources.h"
 #include "synthetic.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 #include "evidential_octomap/semantic_config.h"
 
 namespace evidential_octomap::tools {

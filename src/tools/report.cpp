@@ -142,7 +142,7 @@ nlohmann::json toJson(const RunReport& r, const ClassTable& classes) {
   std::ostringstream printed;
   r.config.print(printed);
   j["parameters_text"] = printed.str();
-  j["metric_definitions"] = "include/evidential_octomap/metrics.h";
+  j["metric_definitions"] = "include/evidential_octomap/evaluation/metrics.h";
   j["map"] = qualityJson(mq);
   j["map"]["occupied"] = r.map.occupied;
   j["map"]["semantic_coverage"] = num(r.map.semantic_coverage);

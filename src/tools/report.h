@@ -10,7 +10,7 @@
 
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 #include "evidential_octomap/semantic_config.h"
 
 namespace evidential_octomap::tools {

@@ -8,8 +8,8 @@
 
 #include <vector>
 
-#include "dataset.h"
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/dataset.h"
+#include "evidential_octomap/evaluation/metrics.h"
 
 namespace evidential_octomap::tools {
 

@@ -28,6 +28,7 @@
 #include <thread>
 #include <vector>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
 
@@ -97,15 +98,15 @@ std::unique_ptr<EvidentialOcTree> blockMap(int side, int num_classes, unsigned s
     for (int y = 0; y < side; ++y) {
       for (int z = 0; z < side; ++z) {
         const octomap::OcTreeKey key(origin[0] + x, origin[1] + y, origin[2] + z);
-        EvidentialOcTreeNode* leaf = tree->leafForUpdate(key, true);
+        EvidentialOcTreeNode* leaf = detail::TreeEditing::leafForUpdate(*tree, key, true);
         leaf->setLogOdds(value(rng) / 20.0f - 1.0f);
         std::vector<float> payload(num_classes);
         for (float& v : payload) v = value(rng);
-        tree->setPayload(leaf, payload.data());
+        detail::TreeEditing::setPayload(*tree, leaf, payload.data());
       }
     }
   }
-  tree->updateInnerNodes();
+  detail::TreeEditing::updateInnerNodes(*tree);
   return tree;
 }
 

@@ -24,7 +24,7 @@ from tf2_msgs.msg import TFMessage
 PKG = "evidential_octomap"
 ROOT = rospkg.RosPack().get_path(PKG)
 sys.path.insert(0, os.path.join(ROOT, "src", "ros", "scripts"))
-from play_semantickitti import load_class_table, make_tf, read_calib_tr, read_poses  # noqa: E402
+from play_semantickitti import DatasetReader, load_class_table, make_tf  # noqa: E402
 
 DATA = os.path.join(ROOT, "data", "semantickitti_08_first10")
 SCANS = ["000000", "000001", "000002"]
@@ -49,7 +49,7 @@ def raw_cloud(xyzr, label, header):
                        is_dense=True, data=data.tobytes())
 
 
-def write_bag(path, lut, poses):
+def write_bag(path, reader):
     """Raw clouds in frame velodyne, /tf map -> odom -> base_link, /tf_static base_link -> velodyne."""
     with rosbag.Bag(path, "w") as bag:
         t0 = rospy.Time.from_sec(T0)
@@ -57,15 +57,16 @@ def write_bag(path, lut, poses):
         latched = {"topic": "/tf_static", "type": TFMessage._type, "md5sum": TFMessage._md5sum,
                    "message_definition": TFMessage._full_text, "latching": "1"}
         bag.write("/tf_static", TFMessage([static]), t0, connection_header=latched)
-        for i, name in enumerate(SCANS):
+        for i in range(len(SCANS)):
             stamp = t0 + rospy.Duration(2 * i + 1)
-            xyzr = np.fromfile(os.path.join(DATA, "velodyne", name + ".bin"), "<f4").reshape(-1, 4)
-            predicted = lut[np.fromfile(os.path.join(DATA, "predictions", name + ".label"), "<u4") & 0xFFFF]
-            keep = np.linalg.norm(xyzr[:, :3], axis=1) < MAX_RANGE
-            odom_base = poses[int(name)] @ np.linalg.inv(BASE_TO_VELODYNE)
+            name, xyz, remission, predicted, pose = reader.load(i)
+            assert name == SCANS[i], name
+            keep = np.linalg.norm(xyz, axis=1) < MAX_RANGE
+            odom_base = pose @ np.linalg.inv(BASE_TO_VELODYNE)
             bag.write("/tf", TFMessage([make_tf(np.eye(4), stamp, "map", "odom"),
                                         make_tf(odom_base, stamp, "odom", "base_link")]), stamp)
-            cloud = raw_cloud(xyzr[keep], predicted[keep], Header(stamp=stamp, frame_id="velodyne"))
+            xyzr = np.column_stack([xyz, remission])[keep]
+            cloud = raw_cloud(xyzr, predicted[keep], Header(stamp=stamp, frame_id="velodyne"))
             bag.write("/os_cloud_node/points", cloud, stamp)
 
 
@@ -73,15 +74,15 @@ class YourRobotTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         rospy.init_node("test_your_robot")
-        cls.names, cls.lut, _ = load_class_table(os.path.join(ROOT, "config", "classes_semantickitti.yaml"))
-        cls.lut = np.where(cls.lut < 0, 0, cls.lut)
-        cls.poses = read_poses(os.path.join(DATA, "poses.txt"), read_calib_tr(os.path.join(DATA, "calib.txt")))
+        classes = os.path.join(ROOT, "config", "classes_semantickitti.yaml")
+        cls.names = load_class_table(classes)[0]
+        cls.ground_truth = DatasetReader(DATA, classes, "labels")
         cls.relayed, cls.status = [], []
         rospy.Subscriber("/segmentation/points", PointCloud2, cls.relayed.append, queue_size=10)
         rospy.Subscriber(NODE + "/status", MappingStatus, cls.status.append, queue_size=10)
         cls.tmp = tempfile.TemporaryDirectory()
         bag = os.path.join(cls.tmp.name, "raw.bag")
-        write_bag(bag, cls.lut, cls.poses)
+        write_bag(bag, DatasetReader(DATA, classes, "predictions"))
         rospy.wait_for_service(NODE + "/query", timeout=120)
         time.sleep(2.0)  # the relay's subscription
         subprocess.run(["rosbag", "play", "--clock", "--quiet", bag], check=True, timeout=120)
@@ -108,12 +109,10 @@ class YourRobotTest(unittest.TestCase):
         self.assertEqual(self.relayed[0].header.frame_id, "velodyne")
 
     def test_map_carries_the_ground_truth_classes_where_the_scans_saw_them(self):
-        name = SCANS[0]
-        xyz = np.fromfile(os.path.join(DATA, "velodyne", name + ".bin"), "<f4").reshape(-1, 4)[:, :3]
-        gt = self.lut[np.fromfile(os.path.join(DATA, "labels", name + ".label"), "<u4") & 0xFFFF]
+        _, xyz, _, gt, pose = self.ground_truth.load(0)
         keep = (np.linalg.norm(xyz, axis=1) < MAX_RANGE) & (gt > 0)
         pick = np.random.default_rng(0).choice(np.flatnonzero(keep), 3000, replace=False)
-        world = (self.poses[int(name)] @ np.c_[xyz[pick], np.ones(len(pick))].T).T[:, :3]
+        world = (pose @ np.c_[xyz[pick], np.ones(len(pick))].T).T[:, :3]
         query = rospy.ServiceProxy(NODE + "/query", QueryMap)
         answer = query([Point(*p) for p in world])
         labels = np.array(answer.labels)

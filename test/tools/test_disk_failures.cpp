@@ -29,6 +29,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
@@ -65,13 +66,13 @@ std::unique_ptr<EvidentialOcTree> blockMap(int side, unsigned seed) {
     for (int y = 0; y < side; ++y)
       for (int z = 0; z < side; ++z) {
         EvidentialOcTreeNode* leaf =
-            tree->leafForUpdate(octomap::OcTreeKey(origin[0] + x, origin[1] + y, origin[2] + z),
+            detail::TreeEditing::leafForUpdate(*tree, octomap::OcTreeKey(origin[0] + x, origin[1] + y, origin[2] + z),
                                 true);
         leaf->setLogOdds(value(rng) / 20.0f - 1.0f + 0.01f * float(x));
         for (float& v : payload) v = value(rng);
-        tree->setPayload(leaf, payload.data());
+        detail::TreeEditing::setPayload(*tree, leaf, payload.data());
       }
-  tree->updateInnerNodes();
+  detail::TreeEditing::updateInnerNodes(*tree);
   return tree;
 }
 

@@ -5,8 +5,9 @@
 #include <numeric>
 
 #include "evidence_calibration.h"
-#include "evidence_sources.h"
+#include "evidential_octomap/evidence/evidence_sources.h"
 
+using namespace evidential_octomap;
 using namespace evidential_octomap::tools;
 
 namespace {

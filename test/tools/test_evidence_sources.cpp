@@ -2,9 +2,10 @@
 
 #include <numeric>
 
-#include "evidence_sources.h"
+#include "evidential_octomap/evidence/evidence_sources.h"
 #include "synthetic.h"
 
+using namespace evidential_octomap;
 using namespace evidential_octomap::tools;
 
 namespace {

@@ -14,7 +14,7 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "dataset.h"
+#include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/class_table.h"
 #include "generator/kinds.h"
 #include "generator/network_model.h"
@@ -24,8 +24,8 @@
 namespace fs = std::filesystem;
 namespace g = evidential_octomap::generator;
 using evidential_octomap::ClassTable;
-using evidential_octomap::tools::Dataset;
-using evidential_octomap::tools::Scan;
+using evidential_octomap::Dataset;
+using evidential_octomap::Scan;
 using namespace tools_test;
 
 namespace {
@@ -90,7 +90,7 @@ std::unique_ptr<Loaded> load(const std::string& dir) {
   for (size_t i = 0; i < d.size(); ++i) {
     l->scans.push_back(d.load(i));
     l->raw_labels.push_back(
-        evidential_octomap::tools::readLabelFile(dir + "/labels/" + d.stems()[i] + ".label"));
+        evidential_octomap::readLabelFile(dir + "/labels/" + d.stems()[i] + ".label"));
     EXPECT_EQ(l->raw_labels.back().size(), l->scans.back().size());  // no all-zero points
   }
   return l;
@@ -280,7 +280,7 @@ TEST(Generator, InstanceIdsAreOnMoverPointsOnlyAndInsideTheirMoversCsvBoxes) {
 
 TEST(Generator, GroundPointsLieOnTheTerrainThroughPosesAndANonIdentityTr) {
   const std::string dir = tiny();
-  const Eigen::Matrix4d Tr = evidential_octomap::tools::readKittiCalibTr(dir + "/calib.txt");
+  const Eigen::Matrix4d Tr = evidential_octomap::readKittiCalibTr(dir + "/calib.txt");
   EXPECT_GT((Tr.block<3, 3>(0, 0) - Eigen::Matrix3d::Identity()).norm(), 1.0);
   EXPECT_NEAR(
       (Tr.block<3, 3>(0, 0) * Tr.block<3, 3>(0, 0).transpose() - Eigen::Matrix3d::Identity())

@@ -8,12 +8,11 @@
 #include <iterator>
 #include <sstream>
 
-#include "dataset.h"
-#include "evidence_sources.h"
+#include "evidential_octomap/evaluation/dataset.h"
+#include "evidential_octomap/evidence/evidence_sources.h"
 #include "test_helpers.h"
 
 using namespace evidential_octomap;
-using namespace evidential_octomap::tools;
 
 namespace {
 

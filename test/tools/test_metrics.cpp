@@ -7,8 +7,9 @@
 #include <numeric>
 #include <random>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 
 using namespace evidential_octomap;
 
@@ -19,11 +20,11 @@ void setVoxel(EvidentialOcTree& tree, const octomap::point3d& p, bool occupied,
   const octomap::OcTreeKey key = tree.coordToKey(p);
   tree.updateNode(key, occupied);
   if (payload.empty()) return;
-  EvidentialOcTreeNode* node = tree.leafForUpdate(key, false);
+  EvidentialOcTreeNode* node = detail::TreeEditing::leafForUpdate(tree, key, false);
   ASSERT_NE(node, nullptr);
   std::vector<float> values(tree.numClasses(), tree.rule().prior());
   std::copy(payload.begin(), payload.end(), values.begin());
-  tree.setPayload(node, values.data());
+  detail::TreeEditing::setPayload(tree, node, values.data());
 }
 
 const ErrorDetection& detectionOf(const QualityMetrics& q, const std::string& output) {

@@ -10,7 +10,7 @@
 #include <cmath>
 #include <set>
 
-#include "evidential_octomap/paired_bootstrap.h"
+#include "evidential_octomap/evaluation/paired_bootstrap.h"
 
 using namespace evidential_octomap;
 

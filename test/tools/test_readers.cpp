@@ -10,16 +10,16 @@
 #include <sstream>
 #include <vector>
 
-#include "dataset.h"
+#include "evidential_octomap/evaluation/dataset.h"
 #include "test_helpers.h"
 
 namespace fs = std::filesystem;
 using evidential_octomap::ClassTable;
 using evidential_octomap::LogitTransform;
-using evidential_octomap::tools::Dataset;
-using evidential_octomap::tools::InputConversion;
-using evidential_octomap::tools::readFloatMatrix;
-using evidential_octomap::tools::writeNpy;
+using evidential_octomap::Dataset;
+using evidential_octomap::InputConversion;
+using evidential_octomap::readFloatMatrix;
+using evidential_octomap::writeNpy;
 using namespace tools_test;
 
 namespace {

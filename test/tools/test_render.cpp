@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/io.h"
 #include "quality_plot.h"
 #include "render.h"
@@ -39,7 +40,7 @@ struct Scene {
     if (payload.empty()) return;
     std::vector<float> values(tree.numClasses(), tree.rule().prior());
     std::copy(payload.begin(), payload.end(), values.begin());
-    tree.setPayload(tree.leafForUpdate(key, false), values.data());
+    detail::TreeEditing::setPayload(tree, detail::TreeEditing::leafForUpdate(tree, key, false), values.data());
   }
 };
 }  // namespace

@@ -6,7 +6,9 @@
 
 Directory layout: velodyne/NNNNNN.bin (float32 x y z remission), predictions/NNNNNN.label
 (uint32, lower 16 bits = raw class id) or labels/ when ~labels_dir says so, poses.txt (camera-0
-poses, 12 floats per line), calib.txt (Tr: velodyne -> camera).
+poses, 12 floats per line), calib.txt (Tr: velodyne -> camera). The files are read by the
+package's one SemanticKITTI reader (libevidential_octomap_evaluation.so, through ctypes), as the
+CLI, the benchmarks and the Python package read them.
 
 Published (REP 105 names):
   velodyne_points  (remap to the mapping node's cloud_in): fields x, y, z (float32) and
@@ -16,7 +18,7 @@ Published (REP 105 names):
 
 The bundled data ships hard argmax predictions only. ~evidence chooses how they become evidence:
   learned  the learned evidence head (docs/learned_evidence.md), run in C++ through ctypes on the
-           package's libevidential_octomap.so: a small evidential model on each scan's geometry and
+           package's libevidential_octomap_evidence.so: a small evidential model on each scan's geometry and
            predictions, CROSS-FITTED (a scan's evidence never comes from a model that saw its
            labels); ~learned_model (default: config/learned/<dataset>.model);
   onehot   DERIVED: one-hot of magnitude ~evidence_magnitude on the predicted class.
@@ -36,31 +38,32 @@ from tf2_msgs.msg import TFMessage
 
 
 def load_class_table(path):
+    """(class names, dataset name) of a class table YAML."""
     with open(path) as f:
         table = yaml.safe_load(f)
-    names = [c["name"] for c in table["classes"]]
-    lut = np.full(1 << 16, -1, dtype=np.int32)
-    for raw, cls in table["learning_map"].items():
-        lut[int(raw)] = int(cls)
-    return names, lut, table.get("dataset", "")
+    return [c["name"] for c in table["classes"]], table.get("dataset", "")
+
+
+def _library(name, what):
+    try:
+        return ctypes.CDLL(name)
+    except OSError as e:
+        raise RuntimeError("%s needs %s of this package on the library path (source the catkin "
+                           "workspace's devel/setup.bash): %s" % (what, name, e))
 
 
 def learned_evidence_function(model_path, num_classes):
-    """evidence(xyzr, classes) -> N x C float32 by the core library's C entry point."""
-    try:
-        lib = ctypes.CDLL("libevidential_octomap.so")
-    except OSError as e:
-        raise RuntimeError("learned evidence needs libevidential_octomap.so of this package on the "
-                           "library path (source the catkin workspace's devel/setup.bash): %s" % e)
+    """evidence(xyz, remission, classes) -> N x C float32 by the core library's C entry point."""
+    lib = _library("libevidential_octomap_evidence.so", "learned evidence")
     fn = lib.evidential_octomap_learned_evidence
     floats = ctypes.POINTER(ctypes.c_float)
     fn.restype = ctypes.c_int
     fn.argtypes = [ctypes.c_char_p, floats, floats, ctypes.POINTER(ctypes.c_int32), ctypes.c_size_t,
                    ctypes.c_int, floats, ctypes.c_char_p, ctypes.c_size_t]
 
-    def evidence(xyzr, classes):
-        xyz = np.ascontiguousarray(xyzr[:, :3], dtype=np.float32)
-        remission = np.ascontiguousarray(xyzr[:, 3], dtype=np.float32)
+    def evidence(xyz, remission, classes):
+        xyz = np.ascontiguousarray(xyz, dtype=np.float32)
+        remission = np.ascontiguousarray(remission, dtype=np.float32)
         predicted = np.ascontiguousarray(classes, dtype=np.int32)
         out = np.empty((len(predicted), num_classes), dtype=np.float32)
         error = ctypes.create_string_buffer(1024)
@@ -72,29 +75,53 @@ def learned_evidence_function(model_path, num_classes):
     return evidence
 
 
-def read_calib_tr(path):
-    with open(path) as f:
-        for line in f:
-            key, _, values = line.partition(":")
-            if key.strip() == "Tr":
-                tr = np.eye(4)
-                tr[:3, :4] = np.array(values.split(), dtype=np.float64).reshape(3, 4)
-                return tr
-    raise RuntimeError("%s has no Tr line" % path)
+class DatasetReader:
+    """A SemanticKITTI-layout directory through the evaluation library's reader (dataset_c.h):
+    load(i) -> (name, xyz N x 3 in the sensor frame, remission N, classes N, T_W_S 4 x 4)."""
 
+    def __init__(self, path, class_table, classes_from):
+        self._lib = lib = _library("libevidential_octomap_evaluation.so", "reading datasets")
+        lib.evidential_octomap_dataset_open.restype = ctypes.c_void_p
+        lib.evidential_octomap_dataset_open.argtypes = [ctypes.c_char_p, ctypes.c_char_p,
+                                                        ctypes.c_char_p, ctypes.c_size_t]
+        lib.evidential_octomap_dataset_close.argtypes = [ctypes.c_void_p]
+        lib.evidential_octomap_dataset_size.restype = ctypes.c_size_t
+        lib.evidential_octomap_dataset_size.argtypes = [ctypes.c_void_p]
+        lib.evidential_octomap_dataset_load.restype = ctypes.c_longlong
+        lib.evidential_octomap_dataset_load.argtypes = [ctypes.c_void_p, ctypes.c_size_t,
+                                                        ctypes.c_char_p, ctypes.c_char_p,
+                                                        ctypes.c_size_t]
+        lib.evidential_octomap_dataset_scan.argtypes = [ctypes.c_void_p] + [ctypes.c_void_p] * 5 + [
+            ctypes.c_size_t]
+        error = ctypes.create_string_buffer(2048)
+        self._handle = lib.evidential_octomap_dataset_open(path.encode(), class_table.encode(),
+                                                           error, len(error))
+        if not self._handle:
+            raise RuntimeError(error.value.decode())
+        self._classes_from = classes_from.encode()
 
-def read_poses(path, tr):
-    """Velodyne poses in the world: inv(Tr) * P(i) * Tr."""
-    tr_inv = np.linalg.inv(tr)
-    poses = []
-    with open(path) as f:
-        for line in f:
-            if not line.strip():
-                continue
-            p = np.eye(4)
-            p[:3, :4] = np.array(line.split(), dtype=np.float64).reshape(3, 4)
-            poses.append(tr_inv @ p @ tr)
-    return poses
+    def __len__(self):
+        return self._lib.evidential_octomap_dataset_size(self._handle)
+
+    def load(self, i):
+        error = ctypes.create_string_buffer(2048)
+        n = self._lib.evidential_octomap_dataset_load(self._handle, i, self._classes_from, error,
+                                                      len(error))
+        if n < 0:
+            raise RuntimeError(error.value.decode())
+        xyz = np.empty((n, 3), np.float32)
+        remission = np.empty(n, np.float32)
+        classes = np.empty(n, np.int32)
+        pose = np.empty((4, 4), np.float64)
+        name = ctypes.create_string_buffer(256)
+        self._lib.evidential_octomap_dataset_scan(self._handle, xyz.ctypes.data, remission.ctypes.data,
+                                                  classes.ctypes.data, pose.ctypes.data, name,
+                                                  len(name))
+        return name.value.decode(), xyz, remission, classes, pose
+
+    def __del__(self):
+        if getattr(self, "_handle", None):
+            self._lib.evidential_octomap_dataset_close(self._handle)
 
 
 def quaternion_from_matrix(r):
@@ -184,13 +211,14 @@ def main():
     count = int(get_param("~count", -1))
     start_delay = float(get_param("~start_delay", 1.0))
 
-    names, lut, dataset = load_class_table(classes)
+    names, dataset = load_class_table(classes)
     num_classes = len(names)
     if evidence_kind not in ("onehot", "learned"):
         raise RuntimeError("~evidence must be onehot or learned, not %r" % evidence_kind)
-    tr = read_calib_tr(os.path.join(data, "calib.txt"))
-    poses = read_poses(os.path.join(data, "poses.txt"), tr)
-    scans = sorted(f[:-4] for f in os.listdir(os.path.join(data, "velodyne")) if f.endswith(".bin"))
+    if labels_dir not in ("predictions", "labels"):
+        raise RuntimeError("~labels_dir must be predictions or labels, not %r" % labels_dir)
+    reader = DatasetReader(data, classes, labels_dir)
+    scans = list(range(len(reader)))
     scans = scans[first:] if count < 0 else scans[first:first + count]
     if evidence_kind == "learned":
         learned_model = learned_model or os.path.join(os.path.dirname(classes), "learned",
@@ -207,34 +235,27 @@ def main():
     (print if offline else rospy.logwarn)(
         "play_semantickitti: %d scans from %s; evidence is %s" % (len(scans), data, source))
 
-    def scan_messages(index, name, stamp):
-        xyzr = np.fromfile(os.path.join(data, "velodyne", name + ".bin"), dtype="<f4").reshape(-1, 4)
-        raw = np.fromfile(os.path.join(data, labels_dir, name + ".label"), dtype="<u4") & 0xFFFF
-        if raw.shape[0] != xyzr.shape[0]:
-            raise RuntimeError("%s: %d points but %d labels" % (name, xyzr.shape[0], raw.shape[0]))
-        cls = lut[raw]
-        if (cls < 0).any():
-            raise RuntimeError("%s: raw label %d is not in the learning map of %s"
-                               % (name, int(raw[cls < 0][0]), classes))
+    def scan_messages(index, stamp):
+        name, xyz, remission, cls, pose = reader.load(index)
         if evidence_kind == "learned":
-            evidence = learned(xyzr, cls)
+            evidence = learned(xyz, remission, cls)
         else:
-            evidence = np.zeros((xyzr.shape[0], num_classes), dtype=np.float32)
-            evidence[np.arange(xyzr.shape[0]), cls] = magnitude
+            evidence = np.zeros((len(cls), num_classes), dtype=np.float32)
+            evidence[np.arange(len(cls)), cls] = magnitude
         header = Header(stamp=stamp, frame_id=sensor)
-        return make_cloud(xyzr[:, :3], evidence, header), make_tf(poses[int(name)], stamp, world, sensor)
+        return make_cloud(xyz, evidence, header), make_tf(pose, stamp, world, sensor), pose
 
     if bag_path:
         import rosbag
         with rosbag.Bag(bag_path, "w") as bag:
             t0 = rospy.Time.from_sec(1.0)
             bag.write("/evidence_source", String(source), t0)
-            for i, name in enumerate(scans):
+            for i, index in enumerate(scans):
                 stamp = t0 + rospy.Duration.from_sec(i / max(rate, 1e-3))
-                cloud, tf = scan_messages(i, name, stamp)
+                cloud, tf, _ = scan_messages(index, stamp)
                 bag.write("/tf", TFMessage([tf]), stamp)
                 bag.write("/velodyne_points", cloud, stamp)
-                log("bag: scan %s (%d points)" % (name, cloud.width))
+                log("bag: scan %d (%d points)" % (index, cloud.width))
         log("wrote %d scans to %s (topics /velodyne_points, /tf, /evidence_source)"
             % (len(scans), bag_path))
         return
@@ -250,21 +271,22 @@ def main():
     clouds = {}
     next_start = rospy.Time.now()
     while not rospy.is_shutdown():
-        for i, name in enumerate(scans):
+        for index in scans:
             if rospy.is_shutdown():
                 break
             stamp = rospy.Time.now()
-            if i in clouds:
-                cloud, tf = clouds[i], make_tf(poses[int(name)], stamp, world, sensor)
+            if index in clouds:
+                cloud, pose = clouds[index]
                 cloud.header.stamp = stamp
+                tf = make_tf(pose, stamp, world, sensor)
             else:
-                cloud, tf = scan_messages(i, name, stamp)
+                cloud, tf, pose = scan_messages(index, stamp)
                 if loop:
-                    clouds[i] = cloud
+                    clouds[index] = cloud, pose
             # TF first; the mapping node's tf2 MessageFilter holds the cloud until it has it.
             tf_pub.publish(TFMessage([tf]))
             cloud_pub.publish(cloud)
-            rospy.loginfo("scan %s: %d points", name, cloud.width)
+            rospy.loginfo("scan %d: %d points", index, cloud.width)
             if period > rospy.Duration(0):  # a steady rate: the time a scan took is not added
                 next_start = max(next_start + period, rospy.Time.now() - period)
                 remaining = next_start - rospy.Time.now()

@@ -79,7 +79,7 @@ class LearnedHead:
     def __init__(self, class_names, get_param):
         self.num_classes = len(class_names)
         classes = get_param("~classes")
-        dataset = load_class_table(classes)[2]
+        dataset = load_class_table(classes)[1]
         model = get_param("~learned_model", "") or get_param("~model_file", "") or os.path.join(
             os.path.dirname(classes), "learned", dataset + ".model")
         self.label_field = get_param("~label_field", "label")
@@ -95,7 +95,7 @@ class LearnedHead:
         intensity = points.get(self.intensity_field, np.zeros(len(xyz), np.float32))
         labels = points[self.label_field].astype(np.int64)
         labels[(labels < 0) | (labels >= self.num_classes)] = -1  # "no prediction"
-        return self.evidence(np.column_stack([xyz, intensity]).astype(np.float32), labels)
+        return self.evidence(xyz, np.asarray(intensity, np.float32), labels)
 
 
 def load_model(spec, class_names, get_param):

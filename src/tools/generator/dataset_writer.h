@@ -1,4 +1,5 @@
-// Writes a generated sequence in the SemanticKITTI layout src/tools/dataset.h reads:
+// Writes a generated sequence in the SemanticKITTI layout the evaluation library reads
+// (include/evidential_octomap/evaluation/dataset.h):
 //   velodyne/NNNNNN.bin   float32 x y z remission (end-of-sweep sensor frame, valid returns only)
 //   labels/NNNNNN.label   uint32 raw class id | instance << 16 (movers; static points 0)
 //   predictions/          uint32 raw class id of the argmax

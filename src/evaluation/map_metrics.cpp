@@ -5,7 +5,7 @@
 #include <sstream>
 #include <unordered_set>
 
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 
 namespace evidential_octomap {
 

@@ -1,4 +1,4 @@
-#include "evidence_sources.h"
+#include "evidential_octomap/evidence/evidence_sources.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include "evidential_octomap/neighbour_grid.h"
+#include "evidential_octomap/evidence/neighbour_grid.h"
 
-namespace evidential_octomap::tools {
+namespace evidential_octomap {
 
 namespace {
 const std::vector<std::pair<EvidenceSource, std::string>> kSourceNames{
@@ -244,4 +244,4 @@ std::vector<float> deriveEvidence(const Scan& scan, size_t scan_index,
   return {};
 }
 
-}  // namespace evidential_octomap::tools
+}  // namespace evidential_octomap

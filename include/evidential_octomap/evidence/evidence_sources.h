@@ -10,7 +10,7 @@
 //              *other* scans only (leave-one-scan-out) and smoothed towards the global accuracy;
 //              u is constant per predicted class and larger for the less precise classes.
 //   learned    a small evidential MLP on per-point geometry and the hard predictions
-//              (include/evidential_octomap/learned_evidence.h), CROSS-FITTED: each scan's
+//              (include/evidential_octomap/evidence/learned_evidence.h), CROSS-FITTED: each scan's
 //              evidence comes from the model fold(s) not trained on it. Labelled "learned
 //              (cross-fitted)", never "derived".
 #pragma once
@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "dataset.h"
-#include "evidential_octomap/learned_evidence.h"
+#include "evidential_octomap/evaluation/dataset.h"
+#include "evidential_octomap/evidence/learned_evidence.h"
 
-namespace evidential_octomap::tools {
+namespace evidential_octomap {
 
 enum class EvidenceSource { kFile, kOneHot, kKnnVote, kConfusion, kLearned };
 
@@ -85,7 +85,7 @@ ScanInput scanInput(const Scan& scan);
 
 std::vector<float> oneHotEvidence(const std::vector<int>& predicted, int num_classes,
                                   float magnitude);
-// The k nearest within `radius` by NeighbourGrid (evidential_octomap/neighbour_grid.h).
+// The k nearest within `radius` by NeighbourGrid (evidential_octomap/evidence/neighbour_grid.h).
 std::vector<float> knnVoteEvidence(const std::vector<Eigen::Vector3f>& points,
                                    const std::vector<int>& predicted, int num_classes, int k,
                                    double radius, float magnitude);
@@ -93,4 +93,4 @@ std::vector<float> confusionEvidence(const std::vector<int>& predicted,
                                      const std::vector<double>& conditional, int num_classes,
                                      float magnitude);
 
-}  // namespace evidential_octomap::tools
+}  // namespace evidential_octomap

@@ -1,4 +1,4 @@
-#include "evidential_octomap/kernel.h"
+#include "evidential_octomap/sparse_kernel.h"
 
 #include <algorithm>
 #include <cmath>

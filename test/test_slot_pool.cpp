@@ -1,20 +1,20 @@
-// PayloadPool, the store of semantic payloads: slots stay put while the pool grows, released
+// SlotPool, the store of semantic payloads: slots stay put while the pool grows, released
 // slots are reused, and the per-thread Local hands slots out and back without losing any.
 #include <gtest/gtest.h>
 
 #include <set>
 #include <vector>
 
-#include "payload_pool.h"
+#include "slot_pool.h"
 
 namespace evidential_octomap {
 namespace {
 
-TEST(PayloadPool, SlotsKeepTheirAddressAndContentWhileThePoolGrows) {
-  PayloadPool pool(3);
-  PayloadPool::Local local(&pool, 1);
+TEST(SlotPool, SlotsKeepTheirAddressAndContentWhileThePoolGrows) {
+  SlotPool pool(3);
+  SlotPool::Local local(&pool, 1);
   std::vector<std::pair<uint32_t, float*>> slots;
-  for (int i = 0; i < 5 * int(PayloadPool::kBlockSlots); ++i) {
+  for (int i = 0; i < 5 * int(SlotPool::kBlockSlots); ++i) {
     const uint32_t index = local.allocate();
     float* p = pool.slot(index);
     p[0] = float(i);
@@ -32,21 +32,21 @@ TEST(PayloadPool, SlotsKeepTheirAddressAndContentWhileThePoolGrows) {
   }
   EXPECT_EQ(distinct.size(), slots.size());
   // No doubling: the pool holds whole blocks, at most one of them partly used.
-  EXPECT_LE(pool.bytes(), (slots.size() + PayloadPool::kBlockSlots) * 3 * sizeof(float) + 4096);
+  EXPECT_LE(pool.bytes(), (slots.size() + SlotPool::kBlockSlots) * 3 * sizeof(float) + 4096);
 }
 
-TEST(PayloadPool, ReleasedSlotsAreReusedBeforeTheBlocksGrow) {
-  PayloadPool pool(2);
+TEST(SlotPool, ReleasedSlotsAreReusedBeforeTheBlocksGrow) {
+  SlotPool pool(2);
   std::vector<uint32_t> first;
   {
-    PayloadPool::Local local(&pool, 64);
+    SlotPool::Local local(&pool, 64);
     for (int i = 0; i < 1000; ++i) first.push_back(local.allocate());
     for (int i = 0; i < 500; ++i) local.release(first[i]);
   }  // the destructor gives back what was not used
   EXPECT_EQ(pool.inUse(), 500u);
   const size_t bytes = pool.bytes();
   {
-    PayloadPool::Local other(&pool, 64);
+    SlotPool::Local other(&pool, 64);
     std::set<uint32_t> again;
     for (int i = 0; i < 500; ++i) again.insert(other.allocate());
     EXPECT_EQ(again.size(), 500u);

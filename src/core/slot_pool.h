@@ -1,5 +1,5 @@
-// The semantic payloads of a tree: C floats per slot, in fixed blocks of kBlockSlots slots, so
-// the pool grows without the doubling slack and the 2x copy peak of one std::vector, and a slot
+// Slots of a fixed number of floats (one size class of the payload store, payload_store.h), in
+// fixed blocks of kBlockSlots slots, so the pool grows without the doubling slack and the 2x copy peak of one std::vector, and a slot
 // never moves (threads may read slots while others allocate). Released slots are reused first.
 // Private to the core.
 #pragma once
@@ -11,16 +11,16 @@
 
 namespace evidential_octomap {
 
-class PayloadPool {
+class SlotPool {
  public:
   static constexpr uint32_t kBlockSlots = 2048;
   static constexpr uint32_t kMaxBlocks = 1u << 17;  // 2^28 slots
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
 
-  explicit PayloadPool(int width) : width_(width) {}
-  ~PayloadPool() { reset(width_); }
-  PayloadPool(const PayloadPool&) = delete;
-  PayloadPool& operator=(const PayloadPool&) = delete;
+  explicit SlotPool(int width) : width_(width) {}
+  ~SlotPool() { reset(width_); }
+  SlotPool(const SlotPool&) = delete;
+  SlotPool& operator=(const SlotPool&) = delete;
 
   int width() const { return width_; }
   // Drops every slot; `width` floats per slot from now on.
@@ -43,7 +43,7 @@ class PayloadPool {
   // (also done by the destructor). For serial use a batch of 1 keeps the pool exact.
   class Local {
    public:
-    Local(PayloadPool* pool, uint32_t batch) : pool_(pool), batch_(batch) {}
+    Local(SlotPool* pool, uint32_t batch) : pool_(pool), batch_(batch) {}
     Local(const Local&) = delete;
     Local& operator=(const Local&) = delete;
     ~Local() { flush(); }
@@ -52,7 +52,7 @@ class PayloadPool {
     void flush();
 
    private:
-    PayloadPool* pool_;
+    SlotPool* pool_;
     uint32_t batch_;
     std::vector<uint32_t> spare_;
     long long in_use_delta_ = 0;

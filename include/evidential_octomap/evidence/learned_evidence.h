@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "evidential_octomap/point_features.h"
+#include "evidential_octomap/evidence/point_features.h"
 
 namespace evidential_octomap {
 

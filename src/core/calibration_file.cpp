@@ -1,10 +1,10 @@
-#include "calibration_file.h"
+#include "evidential_octomap/calibration_file.h"
 
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
 
-namespace evidential_octomap::tools {
+namespace evidential_octomap {
 
 namespace {
 std::string trimmed(const std::string& s) {
@@ -44,4 +44,4 @@ double readCalibrationCap(const std::string& path) {
   return cap;
 }
 
-}  // namespace evidential_octomap::tools
+}  // namespace evidential_octomap

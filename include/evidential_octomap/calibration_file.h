@@ -5,11 +5,11 @@
 
 #include <string>
 
-namespace evidential_octomap::tools {
+namespace evidential_octomap {
 
 // The read-out cap of a calibration file; throws std::runtime_error naming the file and the line
 // when it cannot be read, holds a key other than evidence_cap, or a cap that is not a finite
 // number >= 0.
 double readCalibrationCap(const std::string& path);
 
-}  // namespace evidential_octomap::tools
+}  // namespace evidential_octomap

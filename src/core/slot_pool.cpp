@@ -1,4 +1,4 @@
-#include "payload_pool.h"
+#include "slot_pool.h"
 
 #include <cstdlib>
 #include <new>
@@ -6,7 +6,7 @@
 
 namespace evidential_octomap {
 
-void PayloadPool::reset(int width) {
+void SlotPool::reset(int width) {
   for (uint32_t b = 0; b < num_blocks_; ++b) delete[] blocks_[b];
   std::free(blocks_);
   blocks_ = nullptr;
@@ -18,13 +18,13 @@ void PayloadPool::reset(int width) {
   width_ = width;
 }
 
-size_t PayloadPool::bytes() const {
+size_t SlotPool::bytes() const {
   return size_t(num_blocks_) * kBlockSlots * width_ * sizeof(float) +
          released_.capacity() * sizeof(uint32_t) +
          size_t(num_blocks_) * sizeof(float*);  // directory pages in use
 }
 
-void PayloadPool::take(uint32_t count, std::vector<uint32_t>* into) {
+void SlotPool::take(uint32_t count, std::vector<uint32_t>* into) {
   std::lock_guard<std::mutex> lock(mutex_);
   for (; count > 0 && !released_.empty(); --count) {
     into->push_back(released_.back());
@@ -44,14 +44,14 @@ void PayloadPool::take(uint32_t count, std::vector<uint32_t>* into) {
   }
 }
 
-void PayloadPool::giveBack(std::vector<uint32_t>* slots, long long in_use_delta) {
+void SlotPool::giveBack(std::vector<uint32_t>* slots, long long in_use_delta) {
   std::lock_guard<std::mutex> lock(mutex_);
   released_.insert(released_.end(), slots->begin(), slots->end());
   slots->clear();
   in_use_ = static_cast<size_t>(static_cast<long long>(in_use_) + in_use_delta);
 }
 
-uint32_t PayloadPool::Local::allocate() {
+uint32_t SlotPool::Local::allocate() {
   if (spare_.empty()) pool_->take(batch_, &spare_);
   const uint32_t index = spare_.back();
   spare_.pop_back();
@@ -59,12 +59,12 @@ uint32_t PayloadPool::Local::allocate() {
   return index;
 }
 
-void PayloadPool::Local::release(uint32_t index) {
+void SlotPool::Local::release(uint32_t index) {
   spare_.push_back(index);
   --in_use_delta_;
 }
 
-void PayloadPool::Local::flush() {
+void SlotPool::Local::flush() {
   if (spare_.empty() && in_use_delta_ == 0) return;
   pool_->giveBack(&spare_, in_use_delta_);
   in_use_delta_ = 0;

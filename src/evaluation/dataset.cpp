@@ -1,4 +1,4 @@
-#include "dataset.h"
+#include "evidential_octomap/evaluation/dataset.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 
 namespace fs = std::filesystem;
 
-namespace evidential_octomap::tools {
+namespace evidential_octomap {
 
 namespace {
 
@@ -411,4 +411,4 @@ Scan Dataset::load(size_t i) const {
   return scan;
 }
 
-}  // namespace evidential_octomap::tools
+}  // namespace evidential_octomap

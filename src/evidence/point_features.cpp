@@ -1,4 +1,4 @@
-#include "evidential_octomap/point_features.h"
+#include "evidential_octomap/evidence/point_features.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#include "evidential_octomap/neighbour_grid.h"
+#include "evidential_octomap/evidence/neighbour_grid.h"
 
 namespace evidential_octomap {
 

@@ -1,4 +1,4 @@
-#include "evidential_octomap/learned_evidence.h"
+#include "evidential_octomap/evidence/learned_evidence.h"
 
 #include <algorithm>
 #include <cmath>

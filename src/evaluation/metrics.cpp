@@ -1,6 +1,6 @@
 // Metric definitions (metrics.h): confusion matrix, error-detection rankings, and the
 // accumulator that turns per-query answers into the metric set.
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 
 #include <algorithm>
 #include <cmath>

@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 
 namespace evidential_octomap {
 

@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "evidential_octomap/kernel.h"
+#include "evidential_octomap/sparse_kernel.h"
 
 namespace evidential_octomap {
 namespace {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 
 namespace evidential_octomap {

@@ -1,11 +1,11 @@
-#include "evidential_octomap/learned_evidence_c.h"
+#include "evidential_octomap/evidence/learned_evidence_c.h"
 
 #include <algorithm>
 #include <cstring>
 #include <exception>
 #include <string>
 
-#include "evidential_octomap/learned_evidence.h"
+#include "evidential_octomap/evidence/learned_evidence.h"
 
 namespace {
 void setError(char* error, size_t size, const std::string& what) {

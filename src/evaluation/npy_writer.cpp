@@ -1,10 +1,10 @@
 // .npy writer (format 1.0): magic, version, a header dict padded to a multiple of 64 bytes, data.
 #include <ostream>
 
-#include "dataset.h"
+#include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/io.h"
 
-namespace evidential_octomap::tools {
+namespace evidential_octomap {
 
 namespace {
 
@@ -37,4 +37,4 @@ void writeNpy(const std::string& path, const int32_t* values, size_t rows, size_
   writeNpyBytes(path, "<i4", values, rows, cols, sizeof(int32_t));
 }
 
-}  // namespace evidential_octomap::tools
+}  // namespace evidential_octomap

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 
 namespace evidential_octomap::tools {
 

@@ -27,7 +27,7 @@
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/subjective_logic.h"
 
-namespace evidential_octomap::tools {
+namespace evidential_octomap {
 
 struct Scan {
   std::string name;                 // file stem, e.g. "000000"
@@ -109,4 +109,4 @@ Eigen::Matrix4d velodynePose(const Eigen::Matrix4d& P_cam, const Eigen::Matrix4d
 std::vector<int> classesOfLabels(const std::vector<uint32_t>& raw, const ClassTable& classes,
                                  const std::string& file);
 
-}  // namespace evidential_octomap::tools
+}  // namespace evidential_octomap

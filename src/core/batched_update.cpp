@@ -1,17 +1,18 @@
 // The batched scan update of EvidentialOcTree: one pass over the tree in Morton order, every
 // touched leaf once, inner nodes above touched leaves once. The pass walks serially down to the
-// subtrees that receive updates (subtree_updates.h), updates those in parallel, each with the
+// subtrees that receive updates (subtree_source.h), updates those in parallel, each with the
 // updates its source computes for it, then fixes the inner nodes above them.
 #include <omp.h>
 
 #include <algorithm>
 #include <utility>
 
+#include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "morton.h"
 #include "payload_store.h"
 #include "radix_sort.h"
-#include "subtree_updates.h"
+#include "subtree_source.h"
 #include "tree_edit.h"
 
 namespace evidential_octomap {
@@ -135,6 +136,20 @@ size_t EvidentialOcTree::applySortedUpdates(const VoxelUpdate* updates, size_t c
   ListSource source(updates, count, increments.data());
   const int threads = config_.threads > 0 ? config_.threads : omp_get_max_threads();
   return applySubtrees(source, create_semantic_leaves, threads, nullptr);
+}
+
+void EvidentialOcTree::addDroppedRows(std::vector<DroppedRows>& dropped) {
+  std::vector<VoxelUpdate> updates;
+  std::vector<double> rows;
+  for (DroppedRows& d : dropped) {
+    const uint32_t offset = static_cast<uint32_t>(rows.size() / num_classes_);
+    for (VoxelUpdate u : d.updates) {
+      u.increments += offset;
+      updates.push_back(u);
+    }
+    rows.insert(rows.end(), d.rows.begin(), d.rows.end());
+  }
+  applyUpdates(std::move(updates), rows, true);
 }
 
 size_t EvidentialOcTree::applySubtrees(SubtreeSource& source, bool create_semantic_leaves,

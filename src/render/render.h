@@ -11,7 +11,7 @@
 
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
-#include "evidential_octomap/metrics.h"
+#include "evidential_octomap/evaluation/metrics.h"
 
 namespace evidential_octomap::tools {
 

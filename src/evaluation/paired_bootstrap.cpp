@@ -1,5 +1,5 @@
 // Paired spatial-block bootstrap of mIoU(all) and Brier differences (paired_bootstrap.h).
-#include "evidential_octomap/paired_bootstrap.h"
+#include "evidential_octomap/evaluation/paired_bootstrap.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "evidential_octomap/neighbour_grid.h"
+#include "evidential_octomap/evidence/neighbour_grid.h"
 
 #include <algorithm>
 #include <cmath>
