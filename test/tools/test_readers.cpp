@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "evidential_octomap/evaluation/dataset.h"
+#include "evidential_octomap/evaluation/dataset_c.h"
 #include "test_helpers.h"
 
 namespace fs = std::filesystem;
@@ -264,4 +265,54 @@ TEST(NpyWriter, KilledAtAnyMomentLeavesTheOldFileWhole) {
     ASSERT_EQ(read.size(), rows * cols) << "trial " << trial;
     EXPECT_TRUE(read == old_values || read == new_values) << "trial " << trial << ": mixed file";
   }
+}
+
+// The C entry points (dataset_c.h, what the ROS player calls through ctypes) give what the C++
+// reader gives: the same points, classes of the chosen files and pose, and clear errors.
+TEST(DatasetCApi, ScanEqualsTheCppReadersScan) {
+  const ClassTable classes = ClassTable::load(kittiClasses());
+  const Dataset d = Dataset::open(kittiDir(), classes);
+  const evidential_octomap::Scan expected = d.load(3);
+  char error[512] = "";
+  evidential_octomap_dataset* c =
+      evidential_octomap_dataset_open(kittiDir().c_str(), kittiClasses().c_str(), error, 512);
+  ASSERT_NE(c, nullptr) << error;
+  EXPECT_EQ(evidential_octomap_dataset_size(c), d.size());
+  for (const char* from : {"predictions", "labels"}) {
+    const long long n = evidential_octomap_dataset_load(c, 3, from, error, sizeof(error));
+    ASSERT_EQ(n, static_cast<long long>(expected.size())) << error;
+    std::vector<float> xyz(3 * n), remission(n);
+    std::vector<int32_t> ids(n);
+    double pose[16];
+    char name[32];
+    evidential_octomap_dataset_scan(c, xyz.data(), remission.data(), ids.data(), pose, name, 32);
+    EXPECT_STREQ(name, expected.name.c_str());
+    const std::vector<int>& want = std::string(from) == "labels" ? expected.gt : expected.predicted;
+    EXPECT_TRUE(std::equal(want.begin(), want.end(), ids.begin())) << from;
+    EXPECT_EQ(remission, expected.remission);
+    for (size_t i = 0; i < expected.size(); i += 997) {
+      EXPECT_EQ(xyz[3 * i + 2], expected.points_S[i].z()) << i;
+    }
+    for (int k = 0; k < 16; ++k) EXPECT_EQ(pose[k], d.pose(3)(k / 4, k % 4)) << k;
+  }
+  EXPECT_EQ(evidential_octomap_dataset_load(c, 3, "evidence", error, sizeof(error)), -1);
+  EXPECT_NE(std::string(error).find("\"predictions\" or \"labels\""), std::string::npos) << error;
+  EXPECT_EQ(evidential_octomap_dataset_load(c, 10, "labels", error, sizeof(error)), -1);
+  EXPECT_NE(std::string(error).find("no scan 10"), std::string::npos) << error;
+  evidential_octomap_dataset_close(c);
+}
+
+TEST(DatasetCApi, OpeningAMissingDirectoryNamesIt) {
+  char error[512] = "";
+  EXPECT_EQ(evidential_octomap_dataset_open("/nonexistent/kitti", kittiClasses().c_str(), error,
+                                            sizeof(error)),
+            nullptr);
+  EXPECT_NE(std::string(error).find("/nonexistent/kitti"), std::string::npos) << error;
+  // A message longer than the buffer is cut, never written past it.
+  char small[8];
+  std::fill(small, small + 8, 'x');
+  EXPECT_EQ(evidential_octomap_dataset_open("/nonexistent/kitti", kittiClasses().c_str(), small, 4),
+            nullptr);
+  EXPECT_EQ(small[3], '\0');
+  EXPECT_EQ(small[4], 'x');
 }
