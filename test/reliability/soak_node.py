@@ -83,18 +83,16 @@ def soak(args):
         node = subprocess.Popen(node_args, stdout=log, stderr=subprocess.STDOUT)
 
         data = os.path.join(REPO, "data/semantickitti_08_first10")
-        names, lut, _ = player.load_class_table(os.path.join(REPO, "config/classes_semantickitti.yaml"))
-        tr = player.read_calib_tr(os.path.join(data, "calib.txt"))
-        poses = player.read_poses(os.path.join(data, "poses.txt"), tr)
-        scans = sorted(f[:-4] for f in os.listdir(os.path.join(data, "velodyne")) if f.endswith(".bin"))
-        clouds = []
-        for name in scans:
-            xyzr = np.fromfile(os.path.join(data, "velodyne", name + ".bin"), dtype="<f4").reshape(-1, 4)
-            raw = np.fromfile(os.path.join(data, "predictions", name + ".label"), dtype="<u4") & 0xFFFF
-            cls = lut[raw]
-            evidence = np.zeros((xyzr.shape[0], len(names)), dtype=np.float32)
-            evidence[np.arange(xyzr.shape[0]), cls] = 20.0
-            clouds.append(player.make_cloud(xyzr[:, :3], evidence, Header(frame_id="velodyne")))
+        classes = os.path.join(REPO, "config/classes_semantickitti.yaml")
+        names = player.load_class_table(classes)[0]
+        reader = player.DatasetReader(data, classes, "predictions")
+        scans, poses, clouds = range(len(reader)), [], []
+        for i in scans:
+            _, xyz, _, cls, pose = reader.load(i)
+            evidence = np.zeros((len(cls), len(names)), dtype=np.float32)
+            evidence[np.arange(len(cls)), cls] = 20.0
+            clouds.append(player.make_cloud(xyz, evidence, Header(frame_id="velodyne")))
+            poses.append(pose)
 
         status = {"msg": None}
         rospy.Subscriber("/evidential_mapping_node/status", MappingStatus,
@@ -131,7 +129,7 @@ def soak(args):
             if published - done < 2:
                 i = next(order)
                 stamp = rospy.Time.now()
-                tf_pub.publish(TFMessage([player.make_tf(poses[int(scans[i])], stamp, "map",
+                tf_pub.publish(TFMessage([player.make_tf(poses[i], stamp, "map",
                                                          "velodyne")]))
                 time.sleep(0.02)  # TF first, as the player does
                 cloud = clouds[i]
