@@ -444,6 +444,10 @@ void MappingServer::publishMap(bool force) {
     std::lock_guard<std::mutex> lock(status_mutex_);
     scans = status_.clouds_inserted;
     mean_ms = status_.mean_insert_ms;
+    status_.last_publish_ms = msSince(t0);
+    status_.max_publish_ms = std::max(status_.max_publish_ms, status_.last_publish_ms);
+    status_.last_views_ms = outputs_->lastViewsMs();
+    status_.last_full_maps_ms = outputs_->lastMapsMs();
   }
   ROS_INFO("published%s in %.0f ms (mean insert %.0f ms over %llu scans)", sent.c_str(),
            msSince(t0), mean_ms, static_cast<unsigned long long>(scans));

@@ -83,9 +83,20 @@ std::string MapOutputs::publish(const EvidentialOcTree& tree, const ClassTable& 
   if (!legend_sent_)
     publishLegend(classes, resolveRange({}, config_.uncertainty_range), uncertaintyName(tree));
   std::string sent = publishViews(tree, classes, origin_W, force);
-  sent += publishMaps(tree, classes, force);
-  if (octomap_msgs_) sent += octomap_msgs_->publish(tree, classes, force);
-  return sent;
+  if (!wholeMapsDue(force)) return sent;  // still stale: sent once the period has passed
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string maps = publishMaps(tree, classes, force);
+  if (octomap_msgs_) maps += octomap_msgs_->publish(tree, classes, force);
+  if (!maps.empty()) {
+    last_maps_sent_ = ros::WallTime::now();
+    last_maps_ms_ = msSince(t0);
+  }
+  return sent + maps;
+}
+
+bool MapOutputs::wholeMapsDue(bool force) const {
+  if (force || config_.full_map_period <= 0.0 || last_maps_sent_.isZero()) return true;
+  return (ros::WallTime::now() - last_maps_sent_).toSec() >= config_.full_map_period;
 }
 
 std::string MapOutputs::publishViews(const EvidentialOcTree& tree, const ClassTable& classes,
@@ -130,9 +141,10 @@ std::string MapOutputs::publishViews(const EvidentialOcTree& tree, const ClassTa
     n_free = voxels.size();
     stampAndSend(&free_markers_, freeMarkers(voxels, frame, depth), now);
   }
+  last_views_ms_ = msSince(t0);
   char part[96];
   std::snprintf(part, sizeof(part), " views of %zu occupied + %zu free voxels (%.0f ms)",
-                n_occupied, n_free, msSince(t0));
+                n_occupied, n_free, last_views_ms_);
   return part;
 }
 

@@ -36,10 +36,16 @@ class MapOutputs {
   std::string publish(const EvidentialOcTree& tree, const ClassTable& classes,
                       const octomap::point3d& origin_W, bool force);
 
+  // Wall time [ms] of the last views and the last whole-map outputs that were sent (~status).
+  double lastViewsMs() const { return last_views_ms_; }
+  double lastMapsMs() const { return last_maps_ms_; }
+
  private:
   std::string publishViews(const EvidentialOcTree& tree, const ClassTable& classes,
                            const octomap::point3d& origin_W, bool force);
   std::string publishMaps(const EvidentialOcTree& tree, const ClassTable& classes, bool force);
+  // The whole-map outputs may be rebuilt now (full_map_period has passed, or `force`).
+  bool wholeMapsDue(bool force) const;
   void publishLegend(const ClassTable& classes, const UncertaintyRange& range,
                      const std::string& uncertainty_name);
 
@@ -53,6 +59,8 @@ class MapOutputs {
   UncertaintyRange legend_range_;
   std::string legend_name_;
   std::unique_ptr<OctomapMsgsInterface> octomap_msgs_;  // nullptr: built without octomap_msgs
+  ros::WallTime last_maps_sent_;  // zero: never
+  double last_views_ms_ = 0.0, last_maps_ms_ = 0.0;
 };
 
 }  // namespace evidential_octomap

@@ -49,6 +49,7 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("label_is_raw", c.label_is_raw, c.label_is_raw);
   nh.param("publish_rate", c.publish_rate, c.publish_rate);
   nh.param("publish_radius", c.publish_radius, c.publish_radius);
+  nh.param("full_map_period", c.full_map_period, c.full_map_period);
   nh.param("uncertainty_range/automatic", c.uncertainty_range.automatic,
            c.uncertainty_range.automatic);
   nh.param("uncertainty_range/min", c.uncertainty_range.min, c.uncertainty_range.min);

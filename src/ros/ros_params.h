@@ -31,6 +31,10 @@ struct NodeConfig {
   bool label_is_raw = false;         // labels are raw dataset ids (table's learning map)
   double publish_rate = 1.0;         // max map publishing rate [Hz]; <= 0: after every scan
   double publish_radius = -1.0;      // > 0: views only within this radius of the sensor [m]
+  // > 0: the whole-map outputs (evidential_map, occupancy_map, projected maps, octomap_msgs),
+  // whose cost grows with the map, are rebuilt at most once per this period [s]; the views
+  // follow publish_rate. A forced publish (reset, clear_bbx) sends them at once.
+  double full_map_period = 0.0;
   UncertaintyRange uncertainty_range;  // uncertainty colour range (fixed 0..1 or automatic)
   int queue_size = 5;                // tf2 MessageFilter queue (clouds waiting for their TF)
   int insert_queue_size = 1;         // clouds waiting for the insertion thread; when full, the
