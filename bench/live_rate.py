@@ -23,7 +23,7 @@ REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 _spec = importlib.util.spec_from_file_location(
     "soak_node", os.path.join(REPO, "test/reliability/soak_node.py"))
 soak_node = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(soak_node)  # free_port()
+_spec.loader.exec_module(soak_node)  # start_roscore(), stop()
 
 FIELDS = ["t_s", "clouds_received", "clouds_inserted", "clouds_dropped_queue",
           "clouds_dropped_invalid", "clouds_dropped_tf", "queue_length", "last_insert_ms",
@@ -51,10 +51,7 @@ def steady_summary(rows, warmup_s, rate):
 
 def run(args):
     os.makedirs(args.out, exist_ok=True)
-    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % soak_node.free_port()
-    port = os.environ["ROS_MASTER_URI"].rsplit(":", 1)[1]
-    procs = [subprocess.Popen(["roscore", "-p", port], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL)]
+    procs = [soak_node.start_roscore()]
     try:
         time.sleep(3)
         import rospy
@@ -94,12 +91,7 @@ def run(args):
             json.dump(summary, f, indent=2)
         print(json.dumps(summary, indent=2))
     finally:
-        for p in reversed(procs):
-            p.terminate()
-            try:
-                p.wait(30)
-            except subprocess.TimeoutExpired:
-                p.kill()
+        soak_node.stop(procs)
 
 
 def main():

@@ -52,6 +52,24 @@ def free_port():
     return port
 
 
+def start_roscore():
+    """A roscore on a free port of its own, with ROS_MASTER_URI pointing at it."""
+    port = free_port()
+    os.environ["ROS_MASTER_URI"] = "http://127.0.0.1:%d" % port
+    return subprocess.Popen(["roscore", "-p", str(port)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+
+
+def stop(procs):
+    """Terminates the processes, the last started first (killed after 30 s)."""
+    for p in reversed(procs):
+        p.terminate()
+        try:
+            p.wait(30)
+        except subprocess.TimeoutExpired:
+            p.kill()
+
+
 def soak(args):
     os.makedirs(args.out, exist_ok=True)
     port = free_port()
