@@ -34,31 +34,20 @@ TOPICS = {"occupied_cells_vis_array": "visualization_msgs/MarkerArray",
           "projected_map": "nav_msgs/OccupancyGrid"}
 
 
-def run_config(name, params, args, scans):
-    """One node + player run; returns the ~status samples."""
+def run_config(name, params, args, scans, status):
+    """One node + player run on the running roscore; returns the ~status samples."""
     out = os.path.join(args.out, name)
     os.makedirs(out, exist_ok=True)
     config = os.path.join(out, "params.yaml")
     with open(config, "w") as f:
         f.write("".join("%s: %s\n" % kv for kv in params.items()))
-    procs = [soak_node.start_roscore()]
+    classes = os.path.join(args.data, "classes.yaml")
     log = open(os.path.join(out, "ros.log"), "w")
+    status.clear()
+    procs = [subprocess.Popen(["roslaunch", "evidential_octomap", "mapping.launch",
+                               "config:=" + config, "classes:=" + classes],
+                              stdout=log, stderr=subprocess.STDOUT)]
     try:
-        time.sleep(3)
-        import rospy
-        from evidential_octomap.msg import MappingStatus
-        classes = os.path.join(args.data, "classes.yaml")
-        procs.append(subprocess.Popen(
-            ["roslaunch", "evidential_octomap", "mapping.launch", "config:=" + config,
-             "classes:=" + classes], stdout=log, stderr=subprocess.STDOUT))
-        rospy.init_node("publish_cost", disable_signals=True)
-        for topic, msg_type in TOPICS.items():  # rviz's displays: the outputs are built for them
-            module, cls = msg_type.split("/")
-            msg_class = getattr(__import__(module + ".msg", fromlist=[cls]), cls)
-            rospy.Subscriber("/" + topic, msg_class, lambda m: None, queue_size=1)
-        status = {}
-        rospy.Subscriber("/evidential_mapping_node/status", MappingStatus,
-                         lambda m: status.__setitem__("msg", m), queue_size=10)
         while "msg" not in status:
             time.sleep(0.1)
         procs.append(subprocess.Popen(
@@ -82,6 +71,31 @@ def run_config(name, params, args, scans):
                 if player_done and s.queue_length == 0 and time.time() - player_done > 6:
                     break
         return rows
+    finally:
+        soak_node.stop(procs)
+        time.sleep(2)
+
+
+def measure(args, scans):
+    """Both configurations on one roscore (rospy binds a process to one master)."""
+    procs = [soak_node.start_roscore()]
+    try:
+        time.sleep(3)
+        import rospy
+        from evidential_octomap.msg import MappingStatus
+        rospy.init_node("publish_cost", disable_signals=True)
+        for topic, msg_type in TOPICS.items():  # rviz's displays: the outputs are built for them
+            module, cls = msg_type.split("/")
+            msg_class = getattr(__import__(module + ".msg", fromlist=[cls]), cls)
+            rospy.Subscriber("/" + topic, msg_class, lambda m: None, queue_size=1)
+        status = {}
+        rospy.Subscriber("/evidential_mapping_node/status", MappingStatus,
+                         lambda m: status.__setitem__("msg", m), queue_size=10)
+        base = {"sensor_model/max_range": 50.0, "publish_rate": 1.0}
+        params = {"whole": base, "bounded": dict(base, publish_radius=args.radius,
+                                                 full_map_period=args.period)}
+        for name in args.only or list(params):
+            run_config(name, params[name], args, scans, status)
     finally:
         soak_node.stop(procs)
 
@@ -126,6 +140,30 @@ def report(args, runs, scans):
     with open(os.path.join(args.out, "summary.md"), "w") as f:
         f.write("\n".join(text) + "\n")
     print("\n".join(text))
+    if args.docs:  # the table into docs/ros.md between its markers, the picture beside it
+        fig.savefig(os.path.join(REPO, "docs/images/publish_cost.png"), dpi=110)
+        path = os.path.join(REPO, "docs/ros.md")
+        doc = open(path).read()
+        begin, end = "<!-- publish-cost: begin -->", "<!-- publish-cost: end -->"
+        head, rest = doc.split(begin)
+        tail = rest.split(end)[1]
+        body = "\n".join(text + ["", "![publishing cost against map size](images/publish_cost.png)"])
+        with open(path, "w") as f:
+            f.write(head + begin + "\n" + body + "\n" + end + tail)
+
+
+def read_runs(args):
+    """The samples of an earlier run (--report-only)."""
+    runs = {}
+    for name, label in run_names(args).items():
+        with open(os.path.join(args.out, name + ".csv")) as f:
+            runs[label] = [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+    return runs
+
+
+def run_names(args):
+    return {"whole": "everything at 1 Hz",
+            "bounded": "views r=%g m, map every %g s" % (args.radius, args.period)}
 
 
 def main():
@@ -137,15 +175,16 @@ def main():
     p.add_argument("--radius", type=float, default=20.0)
     p.add_argument("--period", type=float, default=30.0)
     p.add_argument("--timeout-s", type=float, default=1800.0)
+    p.add_argument("--docs", action="store_true", help="write the table and PNG into docs/")
+    p.add_argument("--report-only", action="store_true", help="report the CSVs in --out")
+    p.add_argument("--only", action="append", choices=["whole", "bounded"],
+                   help="measure only this configuration (the other's CSV from an earlier run)")
     args = p.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    scans = args.scans or len([f for f in os.listdir(os.path.join(args.data, "velodyne"))])
-    base = {"sensor_model/max_range": 50.0, "publish_rate": 1.0}
-    runs = {"everything at 1 Hz": run_config("whole", dict(base), args, scans),
-            "views r=%g m, map every %g s" % (args.radius, args.period): run_config(
-                "bounded", dict(base, publish_radius=args.radius, full_map_period=args.period),
-                args, scans)}
-    report(args, runs, scans)
+    scans = args.scans or len(os.listdir(os.path.join(args.data, "velodyne")))
+    if not args.report_only:
+        measure(args, scans)
+    report(args, read_runs(args), scans)
 
 
 if __name__ == "__main__":
