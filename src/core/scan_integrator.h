@@ -24,8 +24,7 @@ class ScanIntegrator {
   ScanIntegrator(const ScanIntegrator&) = delete;
   ScanIntegrator& operator=(const ScanIntegrator&) = delete;
 
-  const SemanticConfig& config() const { return config_; }
-  int threads() const;  // of the semantic pass: config().threads, or OpenMP's default
+  int threads() const;  // of the semantic pass: the settings' threads, or OpenMP's default
   // Bytes the scratch buffers kept for the next scan hold.
   size_t scratchBytes() const;
 
