@@ -8,9 +8,15 @@
 //   evidential_sequence_bench --data out/long --classes out/long/classes.yaml --order forward
 //   evidential_sequence_bench ... --only exact   # one method alone: its RSS after every step
 //   evidential_sequence_bench ... --methods plain,exact,occupied_only
+//   evidential_sequence_bench ... --only local --radius 60 --tile-dir out/tiles --save out/g.ot
+//     (local: the exact insert in a LocalMap; --save writes the method's whole map at the end,
+//      for exact the map, for local the global map merged from the tiles, both fully pruned)
 //
 // Evidence is derived: one-hot of the predicted class x 20. Timers only; nothing here is a test.
+#include <evidential_octomap/detail/tree_editing.h>
 #include <evidential_octomap/evidential_octree.h>
+#include <evidential_octomap/io.h>
+#include <evidential_octomap/local_map.h>
 #include <omp.h>
 
 #include <cstdio>
@@ -30,11 +36,12 @@
 namespace {
 
 struct Options {
-  std::string data, classes, csv = "sequence.csv", order = "revisit", only;
+  std::string data, classes, csv = "sequence.csv", order = "revisit", only, tile_dir, save;
   std::string methods = "plain,exact,live";  // interleaved; --only: one alone (its own RSS)
   int scans = 0;   // revisit: distinct scans (0: 10); forward: the first N (0: every scan)
   int steps = 60;  // revisit only
   double range = 50.0, resolution = 0.2;
+  double radius = 0.0;  // local: the LocalMap radius (0: the reach of a scan)
 };
 
 Options parse(int argc, char** argv) {
@@ -46,6 +53,9 @@ Options parse(int argc, char** argv) {
       {"--csv", [&](const std::string& v) { o.csv = v; }},
       {"--order", [&](const std::string& v) { o.order = v; }},
       {"--only", [&](const std::string& v) { o.only = v; }},
+      {"--tile-dir", [&](const std::string& v) { o.tile_dir = v; }},
+      {"--save", [&](const std::string& v) { o.save = v; }},
+      {"--radius", [&](const std::string& v) { o.radius = std::stod(v); }},
       {"--methods", [&](const std::string& v) { o.methods = v; }},
       {"--scans", [&](const std::string& v) { o.scans = std::stoi(v); }},
       {"--steps", [&](const std::string& v) { o.steps = std::stoi(v); }},
@@ -76,6 +86,48 @@ std::unique_ptr<evbench::Method> occupiedOnlyMethod(double range) {
   return m;
 }
 
+// The exact insert in a map that keeps only the region around the sensor in memory.
+struct LocalMethod : evbench::SemanticMethod {
+  std::string tile_dir;
+  double radius = 0.0;
+  std::unique_ptr<evidential_octomap::LocalMap> local;
+  void reset(double resolution, int num_classes) override {
+    SemanticMethod::reset(resolution, num_classes);
+    const double r = radius > 0.0 ? radius : evidential_octomap::LocalMap::reach(*tree);
+    local = std::make_unique<evidential_octomap::LocalMap>(tree.get(), tile_dir, r);
+  }
+  evbench::InsertStats insert(const evbench::Scan& scan, const std::vector<float>& evidence) override {
+    return local->insertSemanticScan(scan.points_W, evidence, scan.origin_W);
+  }
+};
+
+std::unique_ptr<evbench::Method> localMethod(const Options& o) {
+  if (o.tile_dir.empty()) throw std::invalid_argument("--only local needs --tile-dir");
+  auto m = std::make_unique<LocalMethod>();
+  m->key = "local";
+  m->label = "semantic insert, exact, local map (tiles on disk)";
+  m->max_range = o.range;
+  m->threads = 2;
+  m->tile_dir = o.tile_dir;
+  m->radius = o.radius;
+  return m;
+}
+
+// The method's whole map, fully pruned, to `path` (a plain map is not written).
+void saveWholeMap(evbench::Method& m, const std::string& path) {
+  std::unique_ptr<evbench::EvidentialOcTree> global;
+  evbench::EvidentialOcTree* map = nullptr;
+  if (auto* local = dynamic_cast<LocalMethod*>(&m)) {
+    global = local->local->globalMap();
+    map = global.get();
+  } else if (auto* semantic = dynamic_cast<evbench::SemanticMethod*>(&m)) {
+    map = semantic->tree.get();
+  }
+  if (!map) return;
+  evidential_octomap::detail::TreeEditing::updateInnerNodes(*map);
+  evidential_octomap::saveMap(*map, path);
+}
+
 // The methods named in `list` (comma-separated keys), in that order.
 std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
   std::vector<std::unique_ptr<evbench::Method>> out;
@@ -90,8 +142,10 @@ std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
       out.push_back(evbench::liveMethod(o.range, false));
     else if (key == "occupied_only")
       out.push_back(occupiedOnlyMethod(o.range));
+    else if (key == "local")
+      out.push_back(localMethod(o));
     else
-      throw std::invalid_argument("methods are plain, exact, live, occupied_only: " + key);
+      throw std::invalid_argument("methods are plain, exact, live, occupied_only, local: " + key);
   }
   return out;
 }
@@ -151,6 +205,7 @@ int main(int argc, char** argv) try {
     csv.flush();
     if (i % 10 == 0) std::cerr << "  step " << i << " / " << order.size() << std::endl;
   }
+  if (!o.save.empty()) saveWholeMap(*methods.front(), o.save);
   return 0;
 } catch (const std::exception& e) {
   std::cerr << "evidential_sequence_bench: " << e.what() << "\n";

@@ -63,6 +63,9 @@ class EvidentialOcTreeNode : public octomap::OcTreeNode {
   // tree's node count, which the caller keeps: threads then edit disjoint subtrees at once.
   EvidentialOcTreeNode* addChild(unsigned i);
   void deleteLeafChildren();  // all eight children (leaves) and the child array
+  // Deletes child i (not its children: the caller has emptied it) and the child array once no
+  // child is left, so that the node reads as a leaf again only when it has none.
+  void deleteChild(unsigned i);
 
   uint32_t payload_ = kNoPayload;
 };
@@ -235,6 +238,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
                             const std::vector<double>& increments, bool create_semantic_leaves);
   void updateInnerNodes();
   void compactPayloads();
+  std::unique_ptr<EvidentialOcTree> detachSubtree(const octomap::OcTreeKey& key, unsigned depth);
+  std::unique_ptr<EvidentialOcTree> emptyLike() const;  // equal settings, no nodes, no statistic
+  void deleteDescendants(EvidentialOcTreeNode* node, Edit& edit);
   void checkCompatible(const EvidentialOcTree& other, const char* what) const;
   // into += from - prior per class, saturating at FLT_MAX (crafted files may hold huge values).
   void addPayload(float* into, const float* from) const;

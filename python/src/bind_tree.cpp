@@ -49,27 +49,6 @@ void checkRows(const MatrixIn& evidence, size_t points, int num_classes) {
   }
 }
 
-InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const MatrixIn& evidence,
-                       std::optional<std::array<double, 3>> origin, std::optional<PoseIn> pose,
-                       EvidentialOcTree* unobserved) {
-  if (origin.has_value() == pose.has_value()) {
-    throw std::invalid_argument(
-        "give exactly one of origin (points in the map frame) or pose "
-        "(4x4 sensor-to-map transform, points in the sensor frame)");
-  }
-  checkRows(evidence, points.shape(0), tree.numClasses());
-  nb::gil_scoped_release release;
-  std::vector<float> values(evidence.data(), evidence.data() + evidence.size());
-  if (pose) {
-    const auto T = pose->view();
-    return tree.insertSemanticScan(toPointcloud(points, *pose), values,
-                                   octomap::point3d(T(0, 3), T(1, 3), T(2, 3)), unobserved);
-  }
-  const std::array<double, 3>& o = *origin;
-  return tree.insertSemanticScan(toPointcloud(points), values, octomap::point3d(o[0], o[1], o[2]),
-                                 unobserved);
-}
-
 QueryResult query(const EvidentialOcTree& tree, const PointsIn& points) {
   const size_t n = points.shape(0);
   const int num_classes = tree.numClasses();
@@ -229,6 +208,28 @@ void bindColorTree(nb::module_& m) {
 }
 
 }  // namespace
+
+InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const MatrixIn& evidence,
+                       std::optional<std::array<double, 3>> origin, std::optional<PoseIn> pose,
+                       EvidentialOcTree* unobserved) {
+  if (origin.has_value() == pose.has_value()) {
+    throw std::invalid_argument(
+        "give exactly one of origin (points in the map frame) or pose "
+        "(4x4 sensor-to-map transform, points in the sensor frame)");
+  }
+  checkRows(evidence, points.shape(0), tree.numClasses());
+  nb::gil_scoped_release release;
+  std::vector<float> values(evidence.data(), evidence.data() + evidence.size());
+  if (pose) {
+    const auto T = pose->view();
+    return tree.insertSemanticScan(toPointcloud(points, *pose), values,
+                                   octomap::point3d(T(0, 3), T(1, 3), T(2, 3)), unobserved);
+  }
+  const std::array<double, 3>& o = *origin;
+  return tree.insertSemanticScan(toPointcloud(points), values, octomap::point3d(o[0], o[1], o[2]),
+                                 unobserved);
+}
+
 
 void bindTree(nb::module_& m) {
   bindResults(m);

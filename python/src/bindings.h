@@ -7,10 +7,14 @@
 #include <nanobind/ndarray.h>
 #include <octomap/Pointcloud.h>
 
+#include <array>
 #include <cstddef>
 #include <initializer_list>
 #include <memory>
+#include <optional>
 #include <vector>
+
+#include "evidential_octomap/evidential_octree.h"
 
 namespace evidential_octomap::python {
 
@@ -42,7 +46,14 @@ Array<bool> toNumpyBool(std::vector<uint8_t>&& flags);
 octomap::Pointcloud toPointcloud(const PointsIn& points);
 octomap::Pointcloud toPointcloud(const PointsIn& points, const PoseIn& T_W_S);
 
+// EvidentialOcTree.insert_scan: exactly one of origin (points in the map frame) and pose (4x4
+// sensor-to-map, points in the sensor frame); the GIL is released while the scan is inserted.
+InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const MatrixIn& evidence,
+                       std::optional<std::array<double, 3>> origin, std::optional<PoseIn> pose,
+                       EvidentialOcTree* unobserved);
+
 void bindClassTable(nb::module_& m);
+void bindLocalMap(nb::module_& m);
 void bindConfig(nb::module_& m);
 void bindTree(nb::module_& m);
 void bindDataset(nb::module_& m);

@@ -44,6 +44,7 @@ NB_MODULE(_core, m) {
   bindClassTable(m);
   bindConfig(m);
   bindTree(m);
+  bindLocalMap(m);
   bindDataset(m);
   bindMetrics(m);
   bindConversions(m);

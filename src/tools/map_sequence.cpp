@@ -29,6 +29,7 @@ struct MapOptions {
   bool render = true;
   bool quiet = false;
   size_t autosave_every = 0;
+  LocalMapOptions local_map;
 };
 
 void runMap(const MapOptions& o) {
@@ -55,8 +56,10 @@ void runMap(const MapOptions& o) {
     makeDirectories(o.out);
     autosave = {o.out + "/map.autosave.ot", o.autosave_every};
   }
+  LocalMapOptions local_map = o.local_map;
+  if (local_map.tile_directory.empty()) local_map.tile_directory = o.out + "/tiles";
   MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,
-                          !o.quiet, "mapping", autosave);
+                          !o.quiet, "mapping", autosave, local_map);
   std::vector<float> query_evidence;
   const std::vector<Query> queries =
       buildQueries(scans, protocol.query_scans, classes.ignore_class, &evidence, &query_evidence);
@@ -124,6 +127,13 @@ void addMapCommand(CLI::App& app) {
                   "Write the map so far to <out>/map.autosave.ot (atomically) every N mapped "
                   "scans; 0: never")
       ->capture_default_str();
+  cmd->add_option("--local-radius", o->local_map.radius,
+                  "Keep only the map within this radius [m] of the sensor in memory, the rest as "
+                  "tiles in --tile-dir, merged into map.ot at the end (0: the whole map in memory; "
+                  "needs --max-range; radius >= max range + 12 voxels)")
+      ->capture_default_str();
+  cmd->add_option("--tile-dir", o->local_map.tile_directory,
+                  "Directory of the local map's tiles (default <out>/tiles; must hold no tiles)");
   cmd->add_option("--protocol", o->protocol,
                   "reconstruction (query the mapped scans) or held-out (map the first half, "
                   "query the second)")

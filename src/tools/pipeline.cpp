@@ -1,4 +1,6 @@
 #include "pipeline.h"
+
+#include "evidential_octomap/local_map.h"
 #include "evidential_octomap/io.h"
 
 #include <octomap/OcTree.h>
@@ -163,18 +165,24 @@ double MapRun::ms_mean() const {
 MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& which,
                   const std::vector<std::vector<float>>& evidence, const ClassTable& classes,
                   const SemanticConfig& config, double resolution, bool progress,
-                  const std::string& label, const Autosave& autosave) {
+                  const std::string& label, const Autosave& autosave,
+                  const LocalMapOptions& local_map) {
   MapRun run;
   run.tree = std::make_unique<EvidentialOcTree>(resolution, classes.numClasses(), config);
   run.tree->setClassNames(classes.names);
+  std::unique_ptr<LocalMap> local;
+  if (local_map.radius > 0.0) {
+    local = std::make_unique<LocalMap>(run.tree.get(), local_map.tile_directory, local_map.radius);
+  }
   ProgressBar bar(which.size(), label, "scan", progress ? -1 : 0);
   for (size_t s : which) {
     const Scan& scan = scans.at(s);
     const octomap::Pointcloud points_W = scan.pointsW();
     const Eigen::Vector3d o = scan.originW();
+    const octomap::point3d origin(float(o.x()), float(o.y()), float(o.z()));
     const auto t0 = std::chrono::steady_clock::now();
-    const InsertStats st = run.tree->insertSemanticScan(
-        points_W, evidence.at(s), octomap::point3d(float(o.x()), float(o.y()), float(o.z())));
+    const InsertStats st = local ? local->insertSemanticScan(points_W, evidence.at(s), origin)
+                                 : run.tree->insertSemanticScan(points_W, evidence.at(s), origin);
     const auto t1 = std::chrono::steady_clock::now();
     run.ms_per_scan.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     InsertStats& t = run.total;
@@ -193,10 +201,11 @@ MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& whi
     t.cpu_ms_update += st.cpu_ms_update;
     ++run.scans_mapped;
     if (autosave.every > 0 && run.scans_mapped % autosave.every == 0) {
-      saveMap(*run.tree, autosave.path);
+      saveMap(local ? *local->globalMap() : *run.tree, autosave.path);
     }
     bar.tick();
   }
+  if (local) run.tree = local->globalMap();
   return run;
 }
 

@@ -71,10 +71,18 @@ struct Autosave {
   size_t every = 0;
 };
 
-// Inserts scans `which` (in order) with their evidence into a new tree.
+// A local map (local_map.h): radius 0 keeps the whole map in memory.
+struct LocalMapOptions {
+  double radius = 0.0;
+  std::string tile_directory;
+};
+
+// Inserts scans `which` (in order) with their evidence into a new tree. With a local map, the
+// run's tree is the global map at the end (the resident region merged with the tiles).
 MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& which,
                   const std::vector<std::vector<float>>& evidence, const ClassTable& classes,
                   const SemanticConfig& config, double resolution, bool progress,
-                  const std::string& label = "mapping", const Autosave& autosave = {});
+                  const std::string& label = "mapping", const Autosave& autosave = {},
+                  const LocalMapOptions& local_map = {});
 
 }  // namespace evidential_octomap::tools

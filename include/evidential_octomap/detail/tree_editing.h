@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
@@ -64,6 +65,16 @@ class TreeEditing {
   // Rebuilds the payload store from the nodes that are still in the tree (after deleteNode),
   // each payload in the smallest slot that holds it.
   static void compactPayloads(EvidentialOcTree& tree) { tree.compactPayloads(); }
+  // Moves the subtree of the node at `depth` (1..tree depth) that holds `key` out of `tree` into
+  // a new map of equal settings (class names, sensor model, clamping; no evidence statistic),
+  // at the same keys; ancestors left without children go too. nullptr, changing nothing, when
+  // the map has no node at that depth there (nothing known, or a pruned block above it).
+  // Inner nodes above follow at updateInnerNodes().
+  static std::unique_ptr<EvidentialOcTree> detachSubtree(EvidentialOcTree& tree,
+                                                         const octomap::OcTreeKey& key,
+                                                         unsigned depth) {
+    return tree.detachSubtree(key, depth);
+  }
 };
 
 }  // namespace detail

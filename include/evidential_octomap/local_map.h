@@ -1,0 +1,69 @@
+// A map whose memory stays bounded over a long mission: the region around the robot stays in
+// the tree, the rest is moved to disk as tiles and brought back when the robot returns.
+//
+// A tile is one octree node at a fixed depth (a cube of 2^k voxels, aligned with the keys), so a
+// tile file holds exactly that node's subtree and no pruned block ever spans two tiles. A scan
+// changes only voxels within its reach of the sensor (max_range plus the largest kernel
+// support), and every tile within `radius` >= reach is in memory before the scan, so no scan
+// ever changes a tile on disk: the global map (the tree merged with every tile) is the map that
+// would have been built without tiles, voxel for voxel.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <octomap/octomap_types.h>
+
+#include "evidential_octomap/evidential_octree.h"
+
+namespace evidential_octomap {
+
+class LocalMap {
+ public:
+  // `tree` (not owned) is the resident map; tiles go to `tile_directory` (created; it must hold
+  // no tiles yet). radius [m]: tiles whose box is farther than radius + one tile edge from the
+  // sensor are written out, tiles within radius are read back. Throws std::invalid_argument
+  // when radius < reach(tree) (or the tree's max_range is unlimited), std::runtime_error when
+  // the directory cannot be made or holds tiles.
+  LocalMap(EvidentialOcTree* tree, const std::string& tile_directory, double radius);
+
+  // follow(origin_W), then the tree's insertSemanticScan.
+  InsertStats insertSemanticScan(const octomap::Pointcloud& points_W,
+                                 const std::vector<float>& evidence,
+                                 const octomap::point3d& origin_W);
+  // Writes out the tiles the sensor at origin_W has left and reads back those it approaches.
+  void follow(const octomap::point3d& origin_W);
+  // The whole map: a copy of the tree merged with every tile on disk (needs the whole map's
+  // memory once).
+  std::unique_ptr<EvidentialOcTree> globalMap() const;
+
+  // How far [m] from the sensor one scan can change the map: max_range, the largest kernel
+  // support and a voxel diagonal. < 0 for an unlimited max_range.
+  static double reach(const EvidentialOcTree& tree);
+  EvidentialOcTree& tree() const { return *tree_; }  // the resident map
+  double radius() const { return radius_; }
+  double tileEdge() const;  // [m]
+  size_t tilesOnDisk() const { return on_disk_.size(); }
+  size_t tilesWritten() const { return tiles_written_; }
+  size_t tilesRead() const { return tiles_read_; }
+
+ private:
+  using TileIndex = std::array<uint16_t, 3>;  // key >> (tree depth - tile depth), per axis
+  double distanceToTile(const octomap::point3d& p, const TileIndex& tile) const;
+  std::string tilePath(const TileIndex& tile) const;
+  void writeOut(const std::vector<TileIndex>& tiles);
+  void readBack(const octomap::point3d& origin_W);
+
+  EvidentialOcTree* tree_;
+  std::string directory_;
+  double radius_;
+  unsigned tile_depth_;
+  std::map<TileIndex, std::string> on_disk_;
+  size_t tiles_written_ = 0, tiles_read_ = 0;
+};
+
+}  // namespace evidential_octomap
