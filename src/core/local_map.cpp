@@ -29,19 +29,27 @@ double LocalMap::reach(const EvidentialOcTree& tree) {
   return max_range + SemanticConfig::kMaxSupportLeaves * res + std::sqrt(3.0) * res;
 }
 
-LocalMap::LocalMap(EvidentialOcTree* tree, const std::string& tile_directory, double radius)
-    : tree_(tree), directory_(tile_directory), radius_(radius) {
-  const double r = reach(*tree);
+namespace {
+// "" when one scan from a sensor cannot change what lies beyond `radius`, else why.
+std::string radiusProblem(const EvidentialOcTree& tree, double radius) {
+  const double r = LocalMap::reach(tree);
   std::ostringstream why;
   if (r < 0.0) {
     why << "a local map needs a finite max_range (the reach of a scan), got "
-        << tree->config().max_range;
+        << tree.config().max_range;
   } else if (!(radius >= r)) {
     why << "local map radius " << radius << " m must be at least the reach of a scan, " << r
-        << " m (max_range " << tree->config().max_range << " m + the largest kernel support + "
+        << " m (max_range " << tree.config().max_range << " m + the largest kernel support + "
         << "a voxel diagonal)";
   }
-  if (!why.str().empty()) throw std::invalid_argument(why.str());
+  return why.str();
+}
+}  // namespace
+
+LocalMap::LocalMap(EvidentialOcTree* tree, const std::string& tile_directory, double radius)
+    : tree_(tree), directory_(tile_directory), radius_(radius) {
+  const std::string problem = radiusProblem(*tree, radius);
+  if (!problem.empty()) throw std::invalid_argument(problem);
   // The largest tile whose edge is at most radius / 2, so the map in memory stays within about
   // 1.5 radius of the sensor.
   const unsigned depth = tree->getTreeDepth();
@@ -91,6 +99,8 @@ InsertStats LocalMap::insertSemanticScan(const octomap::Pointcloud& points_W,
 void LocalMap::follow(const octomap::point3d& origin_W) {
   if (!std::isfinite(origin_W.x()) || !std::isfinite(origin_W.y()) || !std::isfinite(origin_W.z()))
     return;  // the insert refuses such an origin itself
+  const std::string problem = radiusProblem(*tree_, radius_);  // max_range may have changed
+  if (!problem.empty()) throw std::invalid_argument(problem);
   const unsigned shift = tree_->getTreeDepth() - tile_depth_;
   std::vector<TileIndex> leaving;
   for (auto it = tree_->begin_tree(tile_depth_), end = tree_->end_tree(); it != end; ++it) {

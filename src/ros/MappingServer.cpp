@@ -15,6 +15,8 @@
 #include <optional>
 #include <sstream>
 
+#include <unistd.h>
+
 #include "camera_projection.h"
 #include "conversions.h"
 #include "map_services.h"
@@ -81,6 +83,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   if (config_.autosave_path.empty()) config_.autosave_path = defaultAutosavePath(config_.map_file);
   config_.autosave_path = absolutePath(config_.autosave_path);
   if (config_.resume_from_autosave) resumeFromAutosave();
+  startLocalMap();
   {
     std::ostringstream s;
     tree_->config().print(s);
@@ -327,6 +330,7 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
   const auto t0 = std::chrono::steady_clock::now();
   InsertStats stats;
   try {
+    followLocalMap(pending.T_W_S.transform.translation);
     stats =
         tree_->insertSemanticScan(scan.points_S, scan.evidence, toPose(pending.T_W_S.transform));
   } catch (const std::invalid_argument& e) {
@@ -350,6 +354,9 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
     status_.last_insert_ms = ms;
     status_.mean_insert_ms = insert_ms_total_ / double(scans);
     status_.last_points = static_cast<uint32_t>(stats.points_in);
+    status_.local_map_tiles_on_disk = local_map_ ? uint32_t(local_map_->tilesOnDisk()) : 0;
+    status_.local_map_tiles_written = local_map_ ? local_map_->tilesWritten() : 0;
+    status_.local_map_tiles_read = local_map_ ? local_map_->tilesRead() : 0;
   }
   recordMapSize();
   ROS_INFO(
@@ -527,6 +534,13 @@ void MappingServer::adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupan
     map->setSensorModel(tree_->sensorModel());
   }
   tree_ = std::move(map);
+  try {
+    startLocalMap();
+  } catch (const std::exception& e) {
+    local_map_.reset();
+    ROS_ERROR("local map: %s; the whole map stays in memory", e.what());
+    recordError(std::string("local map off: ") + e.what());
+  }
 }
 
 void MappingServer::loadStartupMap() {
@@ -549,11 +563,16 @@ bool MappingServer::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
   res.path = absolutePath(req.path);
   const bool occupancy_only = res.path.size() > 3 && res.path.substr(res.path.size() - 3) == ".bt";
+  size_t leaves = 0, semantic = 0;
   try {
+    const std::unique_ptr<EvidentialOcTree> global = globalMap();  // with tiles on disk
+    const EvidentialOcTree& map = global ? *global : *tree_;
     if (occupancy_only)
-      saveBinaryOccupancy(*tree_, res.path);
+      saveBinaryOccupancy(map, res.path);
     else
-      evidential_octomap::saveMap(*tree_, res.path);
+      evidential_octomap::saveMap(map, res.path);
+    leaves = map.getNumLeafNodes();
+    semantic = map.numSemanticNodes();
   } catch (const std::exception& e) {
     res.success = false;
     res.message = e.what();
@@ -561,9 +580,9 @@ bool MappingServer::saveMap(SaveMap::Request& req, SaveMap::Response& res) {
     return true;
   }
   res.success = true;
-  res.message = "saved " + std::to_string(tree_->getNumLeafNodes()) + " leaves (" +
+  res.message = "saved " + std::to_string(leaves) + " leaves (" +
                 (occupancy_only ? std::string("occupancy only, .bt")
-                                : std::to_string(tree_->numSemanticNodes()) + " semantic") +
+                                : std::to_string(semantic) + " semantic") +
                 ") to " + res.path;
   ROS_INFO("save_map: %s", res.message.c_str());
   return true;
@@ -610,6 +629,13 @@ bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
     ROS_ERROR("reset: %s; keeping rule %s", e.what(), semantic.rule.c_str());
   }
   tree_ = makeTree(semantic);
+  try {
+    startLocalMap();
+  } catch (const std::exception& e) {
+    local_map_.reset();
+    ROS_ERROR("local map: %s; the whole map stays in memory", e.what());
+    recordError(std::string("local map off: ") + e.what());
+  }
   ++map_changes_;
   ROS_INFO("reset: map cleared (rule %s, resolution %g m)", tree_->config().rule.c_str(),
            tree_->getResolution());
@@ -649,6 +675,43 @@ bool MappingServer::query(QueryMap::Request& req, QueryMap::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
   answerQuery(*tree_, req, &res);
   return true;
+}
+
+// --- local map -------------------------------------------------------------------------------
+
+void MappingServer::startLocalMap() {
+  local_map_.reset();
+  if (config_.local_map_radius <= 0.0) return;
+  std::string base = config_.local_map_tile_directory;
+  if (base.empty()) {
+    const char* ros_home = std::getenv("ROS_HOME");
+    const char* home = std::getenv("HOME");
+    base = (ros_home ? std::string(ros_home) : std::string(home ? home : ".") + "/.ros") +
+           "/evidential_octomap/" + ros::this_node::getName().substr(1) + "_tiles";
+  }
+  // One fresh subdirectory per map (start-up, reset, load_map): tiles of another map never mix.
+  const std::string dir = absolutePath(base) + "/map_" + std::to_string(::getpid()) + "_" +
+                          std::to_string(++local_maps_started_);
+  local_map_ = std::make_unique<LocalMap>(tree_.get(), dir, config_.local_map_radius);
+  ROS_INFO("local map: radius %g m, tiles of %g m in %s", local_map_->radius(),
+           local_map_->tileEdge(), dir.c_str());
+}
+
+// Tiles out and in for the sensor's position (map mutex held). A tile that cannot be written
+// (a full disk) stays in memory and mapping goes on; settings reaching beyond the radius throw
+// std::invalid_argument, and the cloud is dropped like any refused cloud.
+void MappingServer::followLocalMap(const geometry_msgs::Vector3& origin_W) {
+  if (!local_map_) return;
+  try {
+    local_map_->follow(octomap::point3d(origin_W.x, origin_W.y, origin_W.z));
+  } catch (const std::runtime_error& e) {
+    recordError(std::string("local map: ") + e.what());
+    ROS_ERROR_THROTTLE(10.0, "local map: %s; the tile stays in memory", e.what());
+  }
+}
+
+std::unique_ptr<EvidentialOcTree> MappingServer::globalMap() const {
+  return local_map_ ? local_map_->globalMap() : nullptr;
 }
 
 // --- autosave and recovery ------------------------------------------------------------------
@@ -728,11 +791,13 @@ void MappingServer::autosaveOnce() {
     changes = map_changes_;
     if (autosaved_once_ && changes == autosaved_changes_) return;  // nothing new to save
     const auto t0 = std::chrono::steady_clock::now();
-    problem = tree_->parameterProblem();
+    const std::unique_ptr<EvidentialOcTree> global = globalMap();  // with tiles on disk
+    const EvidentialOcTree& map = global ? *global : *tree_;
+    problem = map.parameterProblem();
     if (problem.empty()) {
       std::ostringstream s;
       s << std::setprecision(17);  // as saveMap: the same bytes
-      if (!tree_->write(s) || !s.good()) problem = "the map could not be serialised";
+      if (!map.write(s) || !s.good()) problem = "the map could not be serialised";
       bytes = s.str();
     }
     stall_ms = msSince(t0);

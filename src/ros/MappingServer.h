@@ -42,6 +42,7 @@
 #include "evidential_octomap/SaveMap.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/local_map.h"
 #include "latest_queue.h"
 #include "map_outputs.h"
 #include "ros_params.h"
@@ -117,6 +118,12 @@ class MappingServer {
   void autosaveOnce();
   void resumeFromAutosave();
   static std::string defaultAutosavePath(const std::string& map_file);
+  // A new local map over tree_ in a fresh tile subdirectory, after tree_ changes (map mutex
+  // held); none when ~local_map/radius is 0. Throws what LocalMap's constructor throws.
+  void startLocalMap();
+  void followLocalMap(const geometry_msgs::Vector3& origin_W);
+  // The whole map: tree_, or with a local map the tree merged with its tiles (map mutex held).
+  std::unique_ptr<EvidentialOcTree> globalMap() const;
   // Records why a cloud or an autosave failed in ~status (last_error).
   void recordError(const std::string& message);
 
@@ -127,6 +134,8 @@ class MappingServer {
   ClassTable classes_;
   CloudReadOptions read_options_;
   std::unique_ptr<EvidentialOcTree> tree_;
+  std::unique_ptr<LocalMap> local_map_;  // over tree_, with ~local_map/radius > 0
+  size_t local_maps_started_ = 0;
   std::mutex mutex_;  // map, config and outputs: insertion thread, services, timers
 
   tf2_ros::Buffer tf_buffer_;

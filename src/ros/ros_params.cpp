@@ -64,6 +64,10 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("resume_from_autosave", c.resume_from_autosave, c.autosave_period > 0.0);
   if (!(c.autosave_period >= 0.0) || !std::isfinite(c.autosave_period))
     throw std::invalid_argument("~autosave_period must be >= 0 s (0: off)");
+  nh.param("local_map/radius", c.local_map_radius, c.local_map_radius);
+  nh.param("local_map/tile_directory", c.local_map_tile_directory, c.local_map_tile_directory);
+  if (!(c.local_map_radius >= 0.0) || !std::isfinite(c.local_map_radius))
+    throw std::invalid_argument("~local_map/radius must be >= 0 m (0: off)");
   nh.param("base_frame_id", c.base_frame_id, c.base_frame_id);
   nh.param("pointcloud_min_z", c.pointcloud_band.min_z, c.pointcloud_band.min_z);
   nh.param("pointcloud_max_z", c.pointcloud_band.max_z, c.pointcloud_band.max_z);

@@ -50,6 +50,11 @@ struct NodeConfig {
   double autosave_period = 0.0;
   std::string autosave_path;
   bool resume_from_autosave = false;
+  // Local map (local_map.h): local_map_radius > 0 keeps only the map within that radius [m] of
+  // the sensor in memory, the rest as tiles under local_map_tile_directory (default $ROS_HOME
+  // (~/.ros)/evidential_octomap/<node name>_tiles), one fresh subdirectory per map.
+  double local_map_radius = 0.0;
+  std::string local_map_tile_directory;
   std::string base_frame_id;         // frame of pointcloud_min_z/max_z ("" = frame_id)
   HeightBand pointcloud_band;        // pointcloud_min_z/max_z: input points kept [m]
   HeightBand occupancy_band;         // occupancy_min_z/max_z: leaves in views and 2-D maps [m]
