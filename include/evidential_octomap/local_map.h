@@ -36,6 +36,9 @@ class LocalMap {
                                  const std::vector<float>& evidence,
                                  const octomap::point3d& origin_W);
   // Writes out the tiles the sensor at origin_W has left and reads back those it approaches.
+  // Throws std::invalid_argument, changing nothing, when the tree's settings now reach beyond
+  // the radius (a raised max_range), std::runtime_error when a tile cannot be written (the
+  // tile stays in memory) or read.
   void follow(const octomap::point3d& origin_W);
   // The whole map: a copy of the tree merged with every tile on disk (needs the whole map's
   // memory once).
