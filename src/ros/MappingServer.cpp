@@ -534,13 +534,7 @@ void MappingServer::adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupan
     map->setSensorModel(tree_->sensorModel());
   }
   tree_ = std::move(map);
-  try {
-    startLocalMap();
-  } catch (const std::exception& e) {
-    local_map_.reset();
-    ROS_ERROR("local map: %s; the whole map stays in memory", e.what());
-    recordError(std::string("local map off: ") + e.what());
-  }
+  restartLocalMap();
 }
 
 void MappingServer::loadStartupMap() {
@@ -629,13 +623,7 @@ bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
     ROS_ERROR("reset: %s; keeping rule %s", e.what(), semantic.rule.c_str());
   }
   tree_ = makeTree(semantic);
-  try {
-    startLocalMap();
-  } catch (const std::exception& e) {
-    local_map_.reset();
-    ROS_ERROR("local map: %s; the whole map stays in memory", e.what());
-    recordError(std::string("local map off: ") + e.what());
-  }
+  restartLocalMap();
   ++map_changes_;
   ROS_INFO("reset: map cleared (rule %s, resolution %g m)", tree_->config().rule.c_str(),
            tree_->getResolution());
@@ -707,6 +695,17 @@ void MappingServer::followLocalMap(const geometry_msgs::Vector3& origin_W) {
   } catch (const std::runtime_error& e) {
     recordError(std::string("local map: ") + e.what());
     ROS_ERROR_THROTTLE(10.0, "local map: %s; the tile stays in memory", e.what());
+  }
+}
+
+// After load_map or reset: a map the local map cannot follow stays whole in memory (logged).
+void MappingServer::restartLocalMap() {
+  try {
+    startLocalMap();
+  } catch (const std::exception& e) {
+    local_map_.reset();
+    ROS_ERROR("local map: %s; the whole map stays in memory", e.what());
+    recordError(std::string("local map off: ") + e.what());
   }
 }
 

@@ -121,6 +121,7 @@ class MappingServer {
   // A new local map over tree_ in a fresh tile subdirectory, after tree_ changes (map mutex
   // held); none when ~local_map/radius is 0. Throws what LocalMap's constructor throws.
   void startLocalMap();
+  void restartLocalMap();  // startLocalMap, or none when it throws (logged, on ~status)
   void followLocalMap(const geometry_msgs::Vector3& origin_W);
   // The whole map: tree_, or with a local map the tree merged with its tiles (map mutex held).
   std::unique_ptr<EvidentialOcTree> globalMap() const;
