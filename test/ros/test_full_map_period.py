@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """rostest of ~full_map_period: with a period far longer than the test, every scan refreshes the
 views (semantic markers) but the whole-map output (evidential_map) is sent once, after the first
-scan, until a forced publish (~reset) sends it again; ~status carries the publish times."""
+scan, until a forced publish (~reset) sends it again; a late subscriber gets the latest views
+and the latched whole map; ~status carries the publish times."""
 import os
 import sys
 import unittest
@@ -101,6 +102,21 @@ class FullMapPeriodTest(unittest.TestCase):
         self.assertIsNotNone(grown, "the views did not follow the second scan")
         rospy.sleep(2.0)  # the 1 Hz pass runs at least once; the map is still within its period
         self.assertEqual(len(self.topics.wait_for("/evidential_map", 1)), 1)
+
+        # A subscriber that comes late gets the views the live one has now and the latched
+        # whole map of the first scan.
+        late = TopicStore()
+        late.subscribe("/occupied_cells_vis_array", MarkerArray)
+        late.subscribe("/evidential_map", EvidentialMap)
+        late_views = late.wait_for("/occupied_cells_vis_array", 1, timeout_s=30)
+        self.assertIsNotNone(late_views, "a late subscriber got no views")
+        live_views = self.topics.wait_for("/occupied_cells_vis_array", 1)[-1]
+        self.assertEqual(cubes(late_views[0]), cubes(live_views))
+        self.assertGreater(cubes(late_views[0]), shown)
+        late_map = late.wait_for("/evidential_map", 1, timeout_s=30)
+        self.assertIsNotNone(late_map, "a late subscriber got no whole map")
+        self.assertEqual(late_map[0].header.stamp, first[0].header.stamp)
+        self.assertEqual(late_map[0].data, first[0].data)
 
         status = self.topics.wait_for(NODE + "/status")[-1]
         self.assertGreater(status.last_views_ms, 0.0, status)
