@@ -92,6 +92,41 @@ TEST(LocalMap, TheTreeHoldsOnlyTilesNearTheSensor) {
   fs::remove_all(dir);
 }
 
+TEST(LocalMap, MapAtAnswersQueriesFromTilesOnDisk) {
+  const std::string dir = freshDirectory();
+  EvidentialOcTree whole(0.2, 3, shortRange());
+  EvidentialOcTree resident(0.2, 3, shortRange());
+  LocalMap local(&resident, dir, 12.0);
+  for (int x = 0; x <= 60; ++x) {  // out only: the start is on disk at the end
+    const test::SyntheticScan scan =
+        scanAt(octomap::point3d(float(x) + 0.05f, 0.1f, 1.7f), unsigned(x + 1));
+    whole.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+    local.insertSemanticScan(scan.points_W, scan.evidence, scan.origin_W);
+  }
+  ASSERT_GT(local.tilesOnDisk(), 0u);
+  size_t from_disk = 0, labelled = 0;
+  for (float x = 0.1f; x < 64.f; x += 0.5f) {
+    for (float z : {0.05f, 0.7f}) {  // ground and box
+      const octomap::point3d p(x, 0.1f, z);
+      const EvidentialOcTree& map = local.mapAt(p);
+      from_disk += &map != &resident;
+      const VoxelOpinion got = map.query(p), want = whole.query(p);
+      labelled += want.label >= 0;
+      ASSERT_EQ(got.label, want.label) << "x " << x << " z " << z;
+      ASSERT_FLOAT_EQ(got.uncertainty, want.uncertainty) << "x " << x << " z " << z;
+      const auto* node = map.search(p);
+      ASSERT_EQ(node != nullptr, whole.search(p) != nullptr);
+      if (node) {
+        ASSERT_EQ(map.isNodeOccupied(node), whole.isNodeOccupied(whole.search(p)));
+      }
+    }
+  }
+  EXPECT_GT(from_disk, 40u);  // the first ~35 m were answered from tiles
+  EXPECT_GT(labelled, 100u);
+  EXPECT_EQ(&local.mapAt(octomap::point3d(1e7f, 0.f, 0.f)), &resident);  // off the map
+  fs::remove_all(dir);
+}
+
 TEST(LocalMap, ARadiusBelowAScansReachIsRefused) {
   const std::string dir = freshDirectory();
   EvidentialOcTree tree(0.2, 3, shortRange());

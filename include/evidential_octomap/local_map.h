@@ -9,14 +9,15 @@
 // would have been built without tiles, voxel for voxel.
 #pragma once
 
+#include <octomap/octomap_types.h>
+
 #include <array>
 #include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
-
-#include <octomap/octomap_types.h>
 
 #include "evidential_octomap/evidential_octree.h"
 
@@ -43,6 +44,12 @@ class LocalMap {
   // The whole map: a copy of the tree merged with every tile on disk (needs the whole map's
   // memory once).
   std::unique_ptr<EvidentialOcTree> globalMap() const;
+  // The map that holds point_W, for queries: the resident tree, or the tile on disk that
+  // contains the point, read from its file (the last kCachedTiles tiles read stay in memory, so
+  // queries near each other read a tile once). The reference is valid until the next mapAt,
+  // follow or insert. Throws std::runtime_error when that tile cannot be read. Not thread-safe.
+  const EvidentialOcTree& mapAt(const octomap::point3d& point_W) const;
+  static constexpr size_t kCachedTiles = 4;
 
   // How far [m] from the sensor one scan can change the map: max_range, the largest kernel
   // support and a voxel diagonal. < 0 for an unlimited max_range.
@@ -56,6 +63,7 @@ class LocalMap {
 
  private:
   using TileIndex = std::array<uint16_t, 3>;  // key >> (tree depth - tile depth), per axis
+  TileIndex tileOf(const octomap::OcTreeKey& key) const;
   double distanceToTile(const octomap::point3d& p, const TileIndex& tile) const;
   std::string tilePath(const TileIndex& tile) const;
   void writeOut(const std::vector<TileIndex>& tiles);
@@ -66,6 +74,8 @@ class LocalMap {
   double radius_;
   unsigned tile_depth_;
   std::map<TileIndex, std::string> on_disk_;
+  // Tiles on disk read by mapAt, oldest first; emptied whenever tiles move.
+  mutable std::vector<std::pair<TileIndex, std::unique_ptr<EvidentialOcTree>>> cached_;
   size_t tiles_written_ = 0, tiles_read_ = 0;
 };
 

@@ -57,7 +57,8 @@ LocalMap::LocalMap(EvidentialOcTree* tree, const std::string& tile_directory, do
   while (tile_depth_ > 1 && tree->getNodeSize(tile_depth_ - 1) <= radius / 2.0) --tile_depth_;
   std::error_code ec;
   fs::create_directories(directory_, ec);
-  if (ec) throw std::runtime_error("cannot make tile directory " + directory_ + ": " + ec.message());
+  if (ec)
+    throw std::runtime_error("cannot make tile directory " + directory_ + ": " + ec.message());
   for (const auto& entry : fs::directory_iterator(directory_)) {
     if (isTileFile(entry.path())) {
       throw std::runtime_error("tile directory " + directory_ + " holds tiles of another map (" +
@@ -82,10 +83,15 @@ double LocalMap::distanceToTile(const octomap::point3d& p, const TileIndex& tile
   return std::sqrt(squared);
 }
 
+LocalMap::TileIndex LocalMap::tileOf(const octomap::OcTreeKey& k) const {
+  const unsigned shift = tree_->getTreeDepth() - tile_depth_;
+  return {uint16_t(k[0] >> shift), uint16_t(k[1] >> shift), uint16_t(k[2] >> shift)};
+}
+
 std::string LocalMap::tilePath(const TileIndex& t) const {
-  return (fs::path(directory_) / ("tile_" + std::to_string(tile_depth_) + "_" +
-                                  std::to_string(t[0]) + "_" + std::to_string(t[1]) + "_" +
-                                  std::to_string(t[2]) + ".ot"))
+  return (fs::path(directory_) /
+          ("tile_" + std::to_string(tile_depth_) + "_" + std::to_string(t[0]) + "_" +
+           std::to_string(t[1]) + "_" + std::to_string(t[2]) + ".ot"))
       .string();
 }
 
@@ -101,12 +107,10 @@ void LocalMap::follow(const octomap::point3d& origin_W) {
     return;  // the insert refuses such an origin itself
   const std::string problem = radiusProblem(*tree_, radius_);  // max_range may have changed
   if (!problem.empty()) throw std::invalid_argument(problem);
-  const unsigned shift = tree_->getTreeDepth() - tile_depth_;
   std::vector<TileIndex> leaving;
   for (auto it = tree_->begin_tree(tile_depth_), end = tree_->end_tree(); it != end; ++it) {
     if (it.getDepth() != tile_depth_) continue;  // (pruned blocks above a tile stay: one node)
-    const octomap::OcTreeKey k = it.getKey();
-    const TileIndex tile{uint16_t(k[0] >> shift), uint16_t(k[1] >> shift), uint16_t(k[2] >> shift)};
+    const TileIndex tile = tileOf(it.getKey());
     if (distanceToTile(origin_W, tile) > radius_ + tileEdge()) leaving.push_back(tile);
   }
   writeOut(leaving);
@@ -115,6 +119,7 @@ void LocalMap::follow(const octomap::point3d& origin_W) {
 
 void LocalMap::writeOut(const std::vector<TileIndex>& tiles) {
   if (tiles.empty()) return;
+  cached_.clear();
   const unsigned shift = tree_->getTreeDepth() - tile_depth_;
   try {
     for (const TileIndex& tile : tiles) {
@@ -147,6 +152,7 @@ void LocalMap::readBack(const octomap::point3d& origin_W) {
       ++it;
       continue;
     }
+    cached_.clear();
     tree_->merge(*loadMap(it->second));
     std::remove(it->second.c_str());
     it = on_disk_.erase(it);
@@ -158,6 +164,21 @@ std::unique_ptr<EvidentialOcTree> LocalMap::globalMap() const {
   auto global = std::make_unique<EvidentialOcTree>(*tree_);
   for (const auto& tile : on_disk_) global->merge(*loadMap(tile.second));
   return global;
+}
+
+const EvidentialOcTree& LocalMap::mapAt(const octomap::point3d& point_W) const {
+  octomap::OcTreeKey key;
+  if (!tree_->coordToKeyChecked(point_W, key)) return *tree_;  // outside the map: unknown
+  const TileIndex tile = tileOf(key);
+  const auto file = on_disk_.find(tile);
+  if (file == on_disk_.end()) return *tree_;
+  for (const auto& [index, map] : cached_)
+    if (index == tile) return *map;
+  if (cached_.size() == kCachedTiles) cached_.erase(cached_.begin());
+  std::unique_ptr<EvidentialOcTree> part = loadMap(file->second);
+  detail::TreeEditing::readOutLike(*tree_, *part);  // a tile holds no evidence statistic
+  cached_.emplace_back(tile, std::move(part));
+  return *cached_.back().second;
 }
 
 }  // namespace evidential_octomap

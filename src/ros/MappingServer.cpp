@@ -661,7 +661,12 @@ bool MappingServer::clearBbx(BoundingBoxQuery::Request& req, BoundingBoxQuery::R
 
 bool MappingServer::query(QueryMap::Request& req, QueryMap::Response& res) {
   std::lock_guard<std::mutex> lock(mutex_);
-  answerQuery(*tree_, req, &res);
+  try {
+    answerQuery(*tree_, req, &res, local_map_.get());
+  } catch (const std::runtime_error& e) {  // a tile on disk that cannot be read
+    ROS_ERROR("query: %s", e.what());
+    return false;
+  }
   return true;
 }
 

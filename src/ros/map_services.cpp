@@ -10,7 +10,7 @@ octomap::point3d toPoint(const geometry_msgs::Point& p) { return octomap::point3
 }  // namespace
 
 void answerQuery(const EvidentialOcTree& tree, const QueryMap::Request& req,
-                 QueryMap::Response* res) {
+                 QueryMap::Response* res, const LocalMap* local) {
   const int C = tree.numClasses();
   const std::vector<std::string>& names = tree.classNames();
   res->num_classes = static_cast<uint16_t>(C);
@@ -20,8 +20,9 @@ void answerQuery(const EvidentialOcTree& tree, const QueryMap::Request& req,
   res->occupancy.reserve(n);
   res->beliefs.reserve(n * C);
   for (const auto& p : req.points) {
-    const EvidentialOcTreeNode* node = tree.nodeAt(toPoint(p));
-    const VoxelOpinion o = tree.opinion(node);
+    const EvidentialOcTree& map = local ? local->mapAt(toPoint(p)) : tree;
+    const EvidentialOcTreeNode* node = map.nodeAt(toPoint(p));
+    const VoxelOpinion o = map.opinion(node);
     res->labels.push_back(o.label);
     res->class_names.push_back(o.label >= 0 && o.label < int(names.size()) ? names[o.label] : "");
     res->uncertainties.push_back(o.uncertainty);

@@ -1,6 +1,7 @@
 // rostest: a node with a local map (~local_map/radius) moves tiles to disk behind the sensor and
-// reads them back on the way home; its save_map writes the whole map, equal node for node to the
-// map of a node that kept everything in memory (same clouds, same poses).
+// reads them back on the way home; its ~query answers from the tiles on disk and its save_map
+// writes the whole map, equal node for node to the map of a node that kept everything in memory
+// (same clouds, same poses).
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
@@ -90,6 +91,16 @@ TEST(LocalMapNode, SavedMapEqualsTheMapOfANodeWithoutTiles) {
   EXPECT_GT(local.last->local_map_tiles_read, 0u);  // the way back read tiles again
   EXPECT_EQ(whole.last->local_map_tiles_written, 0u);
   EXPECT_LT(local.last->map_leaves, whole.last->map_leaves);  // less in memory
+
+  // ~query far from the sensor (back at x = 0) reads the tiles on disk: the answers of a node
+  // that kept everything. Grid over the far end of the path: ground, walls, free space.
+  ASSERT_GT(local.last->local_map_tiles_on_disk, 0u);
+  const auto far_whole = snapshotGrid("/whole", 40.0, 66.0, 0.5, -5.5, 5.5, 0.5, 0.2, 2.2, 0.5);
+  const auto far_local = snapshotGrid("/local", 40.0, 66.0, 0.5, -5.5, 5.5, 0.5, 0.2, 2.2, 0.5);
+  size_t labelled = 0;
+  for (size_t i = 0; i < far_whole.size(); i += 3) labelled += far_whole[i] >= 0.f;
+  EXPECT_GT(labelled, 200u);
+  EXPECT_EQ(far_local, far_whole);
 
   const auto a = savedMap("whole", "/tmp/local_map_test_whole_" + std::to_string(::getpid()) + ".ot");
   const auto b = savedMap("local", "/tmp/local_map_test_local_" + std::to_string(::getpid()) + ".ot");

@@ -75,6 +75,13 @@ class TreeEditing {
                                                          unsigned depth) {
     return tree.detachSubtree(key, depth);
   }
+  // Gives `part` (a subtree detached from `whole`) the evidence statistic of `whole`, so that
+  // it reads out (effectiveEvidenceCap) as the same voxels of `whole` do.
+  static void readOutLike(const EvidentialOcTree& whole, EvidentialOcTree& part) {
+    part.evidence_log_sum_ = whole.evidence_log_sum_;
+    part.evidence_points_ = whole.evidence_points_;
+    part.followEvidenceStatistic();
+  }
 };
 
 }  // namespace detail
