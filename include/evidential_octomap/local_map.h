@@ -31,6 +31,8 @@ class LocalMap {
   // when radius < reach(tree) (or the tree's max_range is unlimited), std::runtime_error when
   // the directory cannot be made or holds tiles.
   LocalMap(EvidentialOcTree* tree, const std::string& tile_directory, double radius);
+  LocalMap(const LocalMap&) = delete;  // two owners of one tile directory would lose tiles
+  LocalMap& operator=(const LocalMap&) = delete;
 
   // follow(origin_W), then the tree's insertSemanticScan.
   InsertStats insertSemanticScan(const octomap::Pointcloud& points_W,

@@ -20,9 +20,8 @@ void bindLocalMap(nb::module_& m) {
            "directory is created and must hold no tiles.")
       .def(
           "insert_scan",
-          [](LocalMap& local, const PointsIn& points,
-             const MatrixIn& evidence, std::optional<std::array<double, 3>> origin,
-             std::optional<PoseIn> pose) {
+          [](LocalMap& local, const PointsIn& points, const MatrixIn& evidence,
+             std::optional<std::array<double, 3>> origin, std::optional<PoseIn> pose) {
             if (pose) {
               const auto T = pose->view();
               local.follow(octomap::point3d(T(0, 3), T(1, 3), T(2, 3)));
@@ -31,15 +30,24 @@ void bindLocalMap(nb::module_& m) {
             }
             return insertScan(local.tree(), points, evidence, origin, pose, nullptr);
           },
-          nb::arg("points"), nb::arg("evidence"), nb::kw_only(),
-          nb::arg("origin") = nb::none(), nb::arg("pose") = nb::none(),
+          nb::arg("points"), nb::arg("evidence"), nb::kw_only(), nb::arg("origin") = nb::none(),
+          nb::arg("pose") = nb::none(),
           "Writes out and reads back tiles for the sensor's position, then "
           "tree.insert_scan(points, evidence, origin=..., pose=...) on the resident map.")
-      .def("follow",
-           [](LocalMap& local, const std::array<double, 3>& origin) {
-             local.follow(octomap::point3d(origin[0], origin[1], origin[2]));
-           },
-           nb::arg("origin"), "Writes out and reads back tiles for a sensor at origin (3,).")
+      .def(
+          "follow",
+          [](LocalMap& local, const std::array<double, 3>& origin) {
+            local.follow(octomap::point3d(origin[0], origin[1], origin[2]));
+          },
+          nb::arg("origin"), "Writes out and reads back tiles for a sensor at origin (3,).")
+      .def(
+          "query",
+          [](const LocalMap& local, const PointsIn& points) {
+            return query(local.tree(), points, &local);
+          },
+          nb::arg("points"),
+          "tree.query(points), but points on tiles on disk are answered from their tile (read "
+          "from its file; the last 4 tiles read stay in memory), as the whole map would.")
       .def("global_map", &LocalMap::globalMap,
            "The whole map: the tree merged with every tile (a new EvidentialOcTree).")
       .def_static("reach", &LocalMap::reach, nb::arg("tree"),

@@ -13,21 +13,12 @@
 #include "bindings.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
+#include "evidential_octomap/local_map.h"
 #include "evidential_octomap/safe_key.h"
 
 namespace evidential_octomap::python {
 
 namespace {
-
-// What query() returns for N points.
-struct QueryResult {
-  Array<int32_t> labels;     // (N,) argmax class, -1 without semantic evidence
-  Array<float> belief;       // (N, C)
-  Array<float> uncertainty;  // (N,)
-  Array<float> conflict;     // (N,)
-  Array<bool> occupied;      // (N,) the voxel is known and occupied
-  Array<bool> known;         // (N,) the voxel exists in the map (observed)
-};
 
 // Every leaf of the map (pruned blocks are one leaf of their own size).
 struct Leaves {
@@ -47,34 +38,6 @@ void checkRows(const MatrixIn& evidence, size_t points, int num_classes) {
                                 std::to_string(points) + ", " + std::to_string(num_classes) +
                                 ") = (points, classes)");
   }
-}
-
-QueryResult query(const EvidentialOcTree& tree, const PointsIn& points) {
-  const size_t n = points.shape(0);
-  const int num_classes = tree.numClasses();
-  std::vector<int32_t> labels(n);
-  std::vector<float> belief(n * num_classes), uncertainty(n), conflict(n);
-  std::vector<uint8_t> occupied(n), known(n);
-  {
-    nb::gil_scoped_release release;
-    const auto p = points.view();
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < n; ++i) {
-      const octomap::point3d point(p(i, 0), p(i, 1), p(i, 2));
-      const EvidentialOcTreeNode* node = tree.nodeAt(point);  // NaN / far away: unknown
-      const VoxelOpinion o = tree.opinion(node);
-      labels[i] = o.label;
-      uncertainty[i] = o.uncertainty;
-      conflict[i] = o.conflict;
-      std::copy(o.belief.begin(), o.belief.end(), belief.begin() + i * num_classes);
-      known[i] = node != nullptr;
-      occupied[i] = node != nullptr && tree.isNodeOccupied(node);
-    }
-  }
-  return {
-      toNumpy(std::move(labels), {n}),      toNumpy(std::move(belief), {n, size_t(num_classes)}),
-      toNumpy(std::move(uncertainty), {n}), toNumpy(std::move(conflict), {n}),
-      toNumpyBool(std::move(occupied)),     toNumpyBool(std::move(known))};
 }
 
 Leaves leaves(const EvidentialOcTree& tree, bool occupied_only) {
@@ -179,7 +142,8 @@ void bindColorTree(nb::module_& m) {
       .def(
           "save",
           [](const octomap::ColorOcTree& tree, const std::string& path) {
-            writeFileAtomically(path, [&](std::ostream& out) { return tree.write(out) && out.good(); });
+            writeFileAtomically(path,
+                                [&](std::ostream& out) { return tree.write(out) && out.good(); });
           },
           nb::arg("path"), "Writes an .ot file.")
       .def_prop_ro("num_leaves", &octomap::ColorOcTree::getNumLeafNodes)
@@ -230,6 +194,39 @@ InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const Mat
                                  unobserved);
 }
 
+QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const LocalMap* local) {
+  const size_t n = points.shape(0);
+  const int num_classes = tree.numClasses();
+  std::vector<int32_t> labels(n);
+  std::vector<float> belief(n * num_classes), uncertainty(n), conflict(n);
+  std::vector<uint8_t> occupied(n), known(n);
+  const auto p = points.view();
+  const auto answer = [&](size_t i, const EvidentialOcTree& map) {
+    const octomap::point3d point(p(i, 0), p(i, 1), p(i, 2));
+    const EvidentialOcTreeNode* node = map.nodeAt(point);  // NaN / far away: unknown
+    const VoxelOpinion o = map.opinion(node);
+    labels[i] = o.label;
+    uncertainty[i] = o.uncertainty;
+    conflict[i] = o.conflict;
+    std::copy(o.belief.begin(), o.belief.end(), belief.begin() + i * num_classes);
+    known[i] = node != nullptr;
+    occupied[i] = node != nullptr && map.isNodeOccupied(node);
+  };
+  {
+    nb::gil_scoped_release release;
+    if (local) {  // one tile read at a time: mapAt is not thread-safe
+      for (size_t i = 0; i < n; ++i)
+        answer(i, local->mapAt(octomap::point3d(p(i, 0), p(i, 1), p(i, 2))));
+    } else {
+#pragma omp parallel for schedule(static)
+      for (size_t i = 0; i < n; ++i) answer(i, tree);
+    }
+  }
+  return {
+      toNumpy(std::move(labels), {n}),      toNumpy(std::move(belief), {n, size_t(num_classes)}),
+      toNumpy(std::move(uncertainty), {n}), toNumpy(std::move(conflict), {n}),
+      toNumpyBool(std::move(occupied)),     toNumpyBool(std::move(known))};
+}
 
 void bindTree(nb::module_& m) {
   bindResults(m);
@@ -307,7 +304,10 @@ void bindTree(nb::module_& m) {
            "of "
            "equal resolution, C and rule), the evidence this map drops for voxels it has not "
            "observed yet is added there (for exact in-order merges, see add_evidence).")
-      .def("query", &query, nb::arg("points"), "Opinion and occupancy of each point's voxel.")
+      .def(
+          "query",
+          [](const EvidentialOcTree& tree, const PointsIn& points) { return query(tree, points); },
+          nb::arg("points"), "Opinion and occupancy of each point's voxel.")
       .def("leaves", &leaves, nb::arg("occupied_only") = false, "Every leaf as arrays.")
       // --- files and maps
       .def(

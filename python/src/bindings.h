@@ -16,6 +16,10 @@
 
 #include "evidential_octomap/evidential_octree.h"
 
+namespace evidential_octomap {
+class LocalMap;
+}
+
 namespace evidential_octomap::python {
 
 namespace nb = nanobind;
@@ -51,6 +55,21 @@ octomap::Pointcloud toPointcloud(const PointsIn& points, const PoseIn& T_W_S);
 InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const MatrixIn& evidence,
                        std::optional<std::array<double, 3>> origin, std::optional<PoseIn> pose,
                        EvidentialOcTree* unobserved);
+
+// What query() returns for N points.
+struct QueryResult {
+  Array<int32_t> labels;     // (N,) argmax class, -1 without semantic evidence
+  Array<float> belief;       // (N, C)
+  Array<float> uncertainty;  // (N,)
+  Array<float> conflict;     // (N,)
+  Array<bool> occupied;      // (N,) the voxel is known and occupied
+  Array<bool> known;         // (N,) the voxel exists in the map (observed)
+};
+
+// EvidentialOcTree.query; with `local` (whose resident map is `tree`), points on tiles on disk
+// are answered from their tile (LocalMap::mapAt, one point after another).
+QueryResult query(const EvidentialOcTree& tree, const PointsIn& points,
+                  const LocalMap* local = nullptr);
 
 void bindClassTable(nb::module_& m);
 void bindLocalMap(nb::module_& m);
