@@ -153,20 +153,30 @@ def map_sequence(client, job: MappingJob, scans: Optional[int] = None, chunk_siz
         raise ValueError(f"no scans to map in {job.data}")
     ranges = chunk_ranges(count, chunk_size)
     bar = Progress(len(ranges), progress)
+    # Memory: a merge runs as soon as its two inputs exist (merges outrank chunks, deeper merges
+    # first), and a map is released once the merge that consumed it is done (no future refers
+    # to it any more), so a worker holds about one map per level of the merge tree instead of
+    # every chunk map of the sequence.
     chunks = [client.submit(chunk_fn, job, start, stop, retries=retries, pure=False)
               for start, stop in ranges]
-    merges = []
+    depth = {f.key: 0 for f in chunks}
+    merges, inputs = [], {}  # inputs: merge key -> the two futures it consumes
 
     def submit_merge(earlier, later):
+        level = 1 + max(depth[earlier.key], depth[later.key])
         merges.append(client.submit(merge_in_order, earlier, later, job.unclamped,
-                                    retries=retries, pure=False))
+                                    retries=retries, pure=False, priority=level))
+        depth[merges[-1].key] = level
+        inputs[merges[-1].key] = (earlier, later)
         return merges[-1]
 
     result = reduce_in_pairs(chunks, submit_merge)
-    merge_keys = {f.key for f in merges}
-    for future in as_completed(chunks + merges):
-        is_merge = future.key in merge_keys
-        bar.update(merged=int(is_merge), mapped=int(not is_merge))
+    pending = as_completed(chunks + merges)
+    chunks.clear()
+    merges.clear()
+    for future in pending:
+        consumed = inputs.pop(future.key, None)  # dropped at the next step: its maps go
+        bar.update(merged=int(consumed is not None), mapped=int(consumed is None))
     tree = result.result().tree
     if job.unclamped:
         tree.clamp_occupancy()  # once, at the end

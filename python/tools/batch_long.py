@@ -1,6 +1,7 @@
 """Batch mapping on a long sequence: the sequence mapped in one process, then by the batch command
 with 1 and 2 local workers, timed (wall, and CPU of every process involved), and the merged maps
-compared with the one-process map.
+compared with the one-process map; the largest RSS of any process of each run (GNU time's
+%M of the batch command covers its workers, which it reaps).
 
     python python/tools/batch_long.py DATA [--scans N] [--chunk-size 40] [--set max_range=50]
 
@@ -61,11 +62,15 @@ def main():
     rows = []
     loads = [load()]
     sequential, wall, cpu = timed(lambda: batch.map_chunk(job, 0, scans).tree)
-    rows.append(("one process (`batch.map_chunk`, OpenMP threads)", wall, cpu, "reference"))
+    own_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6  # kB -> GB
+    rows.append(("one process (`batch.map_chunk`, OpenMP threads)", wall, cpu, own_rss,
+                 "reference"))
     with tempfile.TemporaryDirectory() as tmp:
         for workers in (1, 2):
             out = os.path.join(tmp, "w%d.ot" % workers)
-            command = [sys.executable, "-m", "evidential_octomap.batch", "--data", args.data,
+            rss_file = os.path.join(tmp, "rss%d" % workers)
+            command = ["/usr/bin/time", "-f", "%M", "-o", rss_file,
+                       sys.executable, "-m", "evidential_octomap.batch", "--data", args.data,
                        "--classes", classes, "--out", out, "--scans", str(scans), "--chunk-size",
                        str(args.chunk_size), "--workers", str(workers), "-q"]
             for s in args.set:
@@ -73,7 +78,9 @@ def main():
             loads.append(load())
             _, wall, cpu = timed(lambda: subprocess.run(command, check=True))
             leaves, labels, occupied = differences(sequential, eo.load(out))
+            rss = int(open(rss_file).read().split()[-1]) / 1e6
             rows.append(("batch, %d worker(s), chunks of %d" % (workers, args.chunk_size), wall, cpu,
+                         rss,
                          "%d leaves (one process: %d); %d leaf labels and %d occupied states differ"
                          % (leaves, sequential.num_leaves, labels, occupied)))
     loads.append(load())
@@ -85,9 +92,9 @@ def main():
              "average before each run and after the last: %s)*" % (
                  " ".join(sys.argv[2:]), title, commit, datetime.date.today().isoformat(),
                  "; ".join(loads)), "",
-             "| run (%d scans) | wall s | CPU s | merged map against the one-process map |" % scans,
-             "|---|---|---|---|"]
-    table += ["| %s | %.1f | %.1f | %s |" % row for row in rows]
+             "| run (%d scans) | wall s | CPU s | largest RSS of a process, GB | merged map against "
+             "the one-process map |" % scans, "|---|---|---|---|---|"]
+    table += ["| %s | %.1f | %.1f | %.2f | %s |" % row for row in rows]
     print("\n".join(table))
 
 
