@@ -3,6 +3,7 @@
 // SYNTHETIC scans of synthetic_scene.h (a ground and a box) along a 60 m path and back.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -124,6 +125,7 @@ TEST(LocalMap, MapAtAnswersQueriesFromTilesOnDisk) {
   EXPECT_GT(from_disk, 40u);  // the first ~35 m were answered from tiles
   EXPECT_GT(labelled, 100u);
   EXPECT_EQ(&local.mapAt(octomap::point3d(1e7f, 0.f, 0.f)), &resident);  // off the map
+  EXPECT_EQ(&local.mapAt(octomap::point3d(std::nanf(""), 0.f, 0.f)), &resident);
   fs::remove_all(dir);
 }
 

@@ -9,6 +9,7 @@
 
 #include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/io.h"
+#include "evidential_octomap/safe_key.h"
 
 namespace evidential_octomap {
 
@@ -168,7 +169,7 @@ std::unique_ptr<EvidentialOcTree> LocalMap::globalMap() const {
 
 const EvidentialOcTree& LocalMap::mapAt(const octomap::point3d& point_W) const {
   octomap::OcTreeKey key;
-  if (!tree_->coordToKeyChecked(point_W, key)) return *tree_;  // outside the map: unknown
+  if (!safeCoordToKey(*tree_, point_W, &key)) return *tree_;  // NaN, inf, off the map: unknown
   const TileIndex tile = tileOf(key);
   const auto file = on_disk_.find(tile);
   if (file == on_disk_.end()) return *tree_;
