@@ -5,8 +5,9 @@
     python3 test/reliability/soak_node.py --plot build/soak/samples.csv docs/figures/soak.png
 
 Starts its own roscore (a free port) and the node (rosrun, from the sourced catkin workspace),
-then replays the bundled scans (data/semantickitti_08_first10, one-hot evidence from the hard
-predictions, as play_semantickitti.py) forth and back, 0..9, 8..0, 1..9, ..., with their poses,
+then replays a sequence (--data: by default the bundled scans, data/semantickitti_08_first10; one-hot
+evidence from the hard predictions, as play_semantickitti.py) forth and back, 0..9, 8..0, 1..9, ...
+(a long generated sequence: 0..519, 518..0, ...), with their poses,
 as fast as the node sustains: the next scan is published as soon as fewer than two are waiting
 (closed loop, so the node is never idle and the queue never overflows by design). Every 10 s the
 node's ~status (clouds inserted, dropped, queue length, last / mean insert time, map leaves and
@@ -100,17 +101,15 @@ def soak(args):
         log = open(os.path.join(args.out, "node.log"), "w")
         node = subprocess.Popen(node_args, stdout=log, stderr=subprocess.STDOUT)
 
-        data = os.path.join(REPO, "data/semantickitti_08_first10")
-        classes = os.path.join(REPO, "config/classes_semantickitti.yaml")
-        names = player.load_class_table(classes)[0]
-        reader = player.DatasetReader(data, classes, "predictions")
-        scans, poses, clouds = range(len(reader)), [], []
-        for i in scans:
+        reader = player.DatasetReader(args.data, args.classes, "predictions")
+        names = player.load_class_table(args.classes)[0]
+
+        def cloud_and_pose(i):  # read when published: a long sequence does not fit in memory
             _, xyz, _, cls, pose = reader.load(i)
             evidence = np.zeros((len(cls), len(names)), dtype=np.float32)
             evidence[np.arange(len(cls)), cls] = 20.0
-            clouds.append(player.make_cloud(xyz, evidence, Header(frame_id="velodyne")))
-            poses.append(pose)
+            return player.make_cloud(xyz, evidence, Header(frame_id="velodyne")), pose
+        cache = [cloud_and_pose(i) for i in range(len(reader))] if len(reader) <= 50 else None
 
         status = {"msg": None}
         rospy.Subscriber("/evidential_mapping_node/status", MappingStatus,
@@ -123,7 +122,7 @@ def soak(args):
             time.sleep(0.1)
         time.sleep(0.5)
 
-        order = forth_and_back(len(scans))
+        order = forth_and_back(len(reader))
         published = 0
         t0 = time.time()
         end = t0 + 60.0 * args.minutes
@@ -146,11 +145,10 @@ def soak(args):
                 last_inserted = s.clouds_inserted
             if published - done < 2:
                 i = next(order)
+                cloud, pose = cache[i] if cache else cloud_and_pose(i)
                 stamp = rospy.Time.now()
-                tf_pub.publish(TFMessage([player.make_tf(poses[i], stamp, "map",
-                                                         "velodyne")]))
+                tf_pub.publish(TFMessage([player.make_tf(pose, stamp, "map", "velodyne")]))
                 time.sleep(0.02)  # TF first, as the player does
-                cloud = clouds[i]
                 cloud.header.stamp = stamp
                 cloud_pub.publish(cloud)
                 published += 1
@@ -220,7 +218,8 @@ def plot(csv_path, png_path):
     ax3.plot(t, col("inserted"), color="tab:orange", label="scans inserted")
     ax3.set_ylabel("scans inserted")
     ax[3].set_xlabel("minutes")
-    fig.suptitle("evidential_mapping_node soak: bundled scans forth and back, closed loop")
+    fig.suptitle("evidential_mapping_node soak (%s): forth and back, closed loop"
+                 % os.path.basename(os.path.dirname(os.path.abspath(csv_path))))
     fig.tight_layout()
     fig.savefig(png_path, dpi=90)
 
@@ -229,6 +228,9 @@ def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
     p.add_argument("--minutes", type=float, default=30.0)
     p.add_argument("--out", default=os.path.join(REPO, "build/soak"))
+    p.add_argument("--data", default=os.path.join(REPO, "data/semantickitti_08_first10"),
+                   help="a SemanticKITTI-layout sequence (e.g. one of evidential_octomap generate)")
+    p.add_argument("--classes", default=os.path.join(REPO, "config/classes_semantickitti.yaml"))
     p.add_argument("--sample-s", type=float, default=10.0)
     p.add_argument("--autosave-period", type=float, default=10.0)
     p.add_argument("--node-param", action="append", default=[],
