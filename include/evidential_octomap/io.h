@@ -23,6 +23,10 @@ namespace evidential_octomap {
 // leaves the stream failed to abort. Throws std::runtime_error naming the path and the reason.
 void writeFileAtomically(const std::string& path, const std::function<bool(std::ostream&)>& write);
 void writeFileAtomically(const std::string& path, const std::string& bytes);
+// `to` becomes a hard link of `from` (the same bytes, no copy; a later atomic replace of `from`
+// leaves `to` as it was), or a copy where links are impossible (another filesystem). Replaces
+// an existing `to`. Throws std::runtime_error naming both paths and the reason.
+void linkOrCopyFile(const std::string& from, const std::string& to);
 
 // Writes `tree` as .ot (AbstractOcTree format, our type id) to `path`, atomically. Refuses
 // (std::runtime_error) a tree whose parameters the reader would refuse (parameterProblem()).

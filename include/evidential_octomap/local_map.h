@@ -63,6 +63,15 @@ class LocalMap {
   size_t tilesWritten() const { return tiles_written_; }
   size_t tilesRead() const { return tiles_read_; }
 
+  // The files of the tiles on disk (a snapshot links them: local_map_snapshot.h).
+  std::vector<std::string> tileFiles() const;
+  // Takes tiles another LocalMap of the same resolution and radius wrote (e.g. an autosave
+  // snapshot's) as tiles on disk of this one: each file is linked (or copied) into the tile
+  // directory; the tiles near the sensor come into the tree at the next follow. Throws
+  // std::runtime_error, adopting none, when a name is not a tile of this map's tile size or the
+  // tree already holds that tile.
+  void adoptTiles(const std::vector<std::string>& files);
+
  private:
   using TileIndex = std::array<uint16_t, 3>;  // key >> (tree depth - tile depth), per axis
   TileIndex tileOf(const octomap::OcTreeKey& key) const;

@@ -181,4 +181,14 @@ void writeFileAtomically(const std::string& path, const std::string& bytes) {
   });
 }
 
+void linkOrCopyFile(const std::string& from, const std::string& to) {
+  ::unlink(to.c_str());
+  if (::link(from.c_str(), to.c_str()) == 0) return;
+  if (errno != EXDEV && errno != EPERM && errno != EMLINK)
+    throw std::runtime_error("cannot link " + from + " to " + to + ": " + errnoText());
+  std::ifstream in(from, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + from + ": " + errnoText());
+  writeFileAtomically(to, [&](std::ostream& out) { return static_cast<bool>(out << in.rdbuf()); });
+}
+
 }  // namespace evidential_octomap

@@ -161,6 +161,39 @@ void LocalMap::readBack(const octomap::point3d& origin_W) {
   }
 }
 
+std::vector<std::string> LocalMap::tileFiles() const {
+  std::vector<std::string> files;
+  for (const auto& tile : on_disk_) files.push_back(tile.second);
+  return files;
+}
+
+void LocalMap::adoptTiles(const std::vector<std::string>& files) {
+  std::map<TileIndex, std::string> adopted;
+  const unsigned shift = tree_->getTreeDepth() - tile_depth_;
+  for (const std::string& file : files) {
+    unsigned depth = 0, x = 0, y = 0, z = 0;
+    char end = 0;
+    const std::string name = fs::path(file).filename().string();
+    if (std::sscanf(name.c_str(), "tile_%u_%u_%u_%u.o%c", &depth, &x, &y, &z, &end) != 5 ||
+        depth != tile_depth_ || x > 0xffff || y > 0xffff || z > 0xffff) {
+      throw std::runtime_error(file + " is not a tile of this local map (tiles of depth " +
+                               std::to_string(tile_depth_) + ": another resolution or radius?)");
+    }
+    const TileIndex tile{uint16_t(x), uint16_t(y), uint16_t(z)};
+    const octomap::OcTreeKey key(octomap::key_type(x << shift), octomap::key_type(y << shift),
+                                 octomap::key_type(z << shift));
+    if (tree_->search(key, tile_depth_) != nullptr)  // the tile, or a pruned block over it
+      throw std::runtime_error(file + ": the tree already holds this tile");
+    adopted[tile] = file;
+  }
+  cached_.clear();
+  for (const auto& [tile, file] : adopted) {
+    const std::string path = tilePath(tile);
+    linkOrCopyFile(file, path);
+    on_disk_[tile] = path;
+  }
+}
+
 std::unique_ptr<EvidentialOcTree> LocalMap::globalMap() const {
   auto global = std::make_unique<EvidentialOcTree>(*tree_);
   for (const auto& tile : on_disk_) global->merge(*loadMap(tile.second));
