@@ -58,6 +58,7 @@ class LocalMap {
   static double reach(const EvidentialOcTree& tree);
   EvidentialOcTree& tree() const { return *tree_; }  // the resident map
   double radius() const { return radius_; }
+  const std::string& directory() const { return directory_; }
   double tileEdge() const;  // [m]
   size_t tilesOnDisk() const { return on_disk_.size(); }
   size_t tilesWritten() const { return tiles_written_; }

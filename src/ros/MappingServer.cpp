@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <iomanip>
 #include <chrono>
+#include <cerrno>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -15,12 +16,14 @@
 #include <optional>
 #include <sstream>
 
+#include <signal.h>
 #include <unistd.h>
 
 #include "camera_projection.h"
 #include "conversions.h"
 #include "map_services.h"
 #include "evidential_octomap/io.h"
+#include "evidential_octomap/local_map_snapshot.h"
 #include "node_status.h"
 #include "startup_report.h"
 
@@ -82,8 +85,8 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
   if (!config_.map_file.empty()) loadStartupMap();
   if (config_.autosave_path.empty()) config_.autosave_path = defaultAutosavePath(config_.map_file);
   config_.autosave_path = absolutePath(config_.autosave_path);
-  if (config_.resume_from_autosave) resumeFromAutosave();
-  startLocalMap();
+  if (config_.resume_from_autosave) resumeFromAutosave();  // (starts the local map it adopts)
+  if (!local_map_) startLocalMap();
   {
     std::ostringstream s;
     tree_->config().print(s);
@@ -173,6 +176,7 @@ MappingServer::~MappingServer() {
     autosave_thread_.join();
     autosaveOnce();  // a clean shutdown loses nothing
   }
+  stopLocalMap();
   image_sync_.reset();
   tf_filter_.reset();
 }
@@ -673,7 +677,7 @@ bool MappingServer::query(QueryMap::Request& req, QueryMap::Response& res) {
 // --- local map -------------------------------------------------------------------------------
 
 void MappingServer::startLocalMap() {
-  local_map_.reset();
+  stopLocalMap();
   if (config_.local_map_radius <= 0.0) return;
   std::string base = config_.local_map_tile_directory;
   if (base.empty()) {
@@ -682,12 +686,40 @@ void MappingServer::startLocalMap() {
     base = (ros_home ? std::string(ros_home) : std::string(home ? home : ".") + "/.ros") +
            "/evidential_octomap/" + ros::this_node::getName().substr(1) + "_tiles";
   }
+  base = absolutePath(base);
+  if (local_maps_started_ == 0) removeTilesOfDeadNodes(base);
   // One fresh subdirectory per map (start-up, reset, load_map): tiles of another map never mix.
-  const std::string dir = absolutePath(base) + "/map_" + std::to_string(::getpid()) + "_" +
+  const std::string dir = base + "/map_" + std::to_string(::getpid()) + "_" +
                           std::to_string(++local_maps_started_);
   local_map_ = std::make_unique<LocalMap>(tree_.get(), dir, config_.local_map_radius);
   ROS_INFO("local map: radius %g m, tiles of %g m in %s", local_map_->radius(),
            local_map_->tileEdge(), dir.c_str());
+}
+
+// The tiles of a map the node no longer holds (reset, load_map, shutdown) are deleted: an
+// autosave snapshot keeps its own links of them.
+void MappingServer::stopLocalMap() {
+  if (!local_map_) return;
+  const std::string dir = local_map_->directory();
+  local_map_.reset();
+  std::error_code ec;
+  std::filesystem::remove_all(dir, ec);
+}
+
+// map_<pid>_<n> directories of a node killed before it could delete them (kill -9, a crash, a
+// power cut): no process has that pid, so nothing reads them any more.
+void MappingServer::removeTilesOfDeadNodes(const std::string& base) {
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(base, ec)) {
+    unsigned long pid = 0, n = 0;
+    char end = 0;
+    const std::string name = entry.path().filename().string();
+    if (std::sscanf(name.c_str(), "map_%lu_%lu%c", &pid, &n, &end) != 2 || pid == 0) continue;
+    if (::kill(pid_t(pid), 0) != 0 && errno == ESRCH) {
+      ROS_INFO("local map: removing %s (tiles of a node that is gone)", entry.path().c_str());
+      std::filesystem::remove_all(entry.path(), ec);
+    }
+  }
 }
 
 // Tiles out and in for the sensor's position (map mutex held). A tile that cannot be written
@@ -745,72 +777,127 @@ void MappingServer::recordError(const std::string& message) {
   status_.last_error = message;
 }
 
-// The autosave is only ever replaced by rename (writeFileAtomically), so the file at the path is
-// the newest complete one; temporaries of a writer killed mid-write are never read.
+// With a local map the autosave is a snapshot directory (local_map_snapshot.h) beside the path:
+// the resident tree and links of the tiles, so it never builds the whole map in memory.
+std::string MappingServer::snapshotBase() const { return config_.autosave_path + ".local_map"; }
+
+// Both kinds of autosave are only ever replaced by rename, so the file or snapshot found is the
+// newest complete one; a killed writer's temporaries are never read. When both exist (the local
+// map was switched on or off between runs), the newer is taken.
 void MappingServer::resumeFromAutosave() {
   const std::string& path = config_.autosave_path;
+  const LocalMapSnapshot snapshot = newestLocalMapSnapshot(snapshotBase());
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) {
+  const auto written = [&ec](const std::string& p) { return std::filesystem::last_write_time(p, ec); };
+  const bool have_file = std::filesystem::exists(path, ec);
+  const bool use_snapshot =
+      !snapshot.directory.empty() && (!have_file || written(snapshot.resident) > written(path));
+  const std::string from = use_snapshot ? snapshot.resident : path;
+  if (!use_snapshot && !have_file) {
     ROS_INFO("autosave: none at %s yet: starting %s", path.c_str(),
              config_.map_file.empty() ? "with an empty map" : "from ~map_file");
     return;
   }
-  const auto written = std::filesystem::last_write_time(path, ec);
+  const auto stamp = written(from);
   const double age_s =
       ec ? -1.0
-         : std::chrono::duration<double>(std::filesystem::file_time_type::clock::now() - written)
+         : std::chrono::duration<double>(std::filesystem::file_time_type::clock::now() - stamp)
                .count();
   bool occupancy_only = false;
   try {
-    adoptMap(readMapFile(path, &occupancy_only), occupancy_only);
+    adoptMap(readMapFile(from, &occupancy_only), occupancy_only);
+    if (use_snapshot) resumeTiles(snapshot.tiles);
   } catch (const std::exception& e) {
     ROS_ERROR("autosave: cannot resume from %s: %s; starting %s (the next autosave replaces it)",
-              path.c_str(), e.what(), config_.map_file.empty() ? "empty" : "from ~map_file");
+              from.c_str(), e.what(), config_.map_file.empty() ? "empty" : "from ~map_file");
     recordError(std::string("autosave not resumed: ") + e.what());
     return;
   }
-  ROS_INFO("autosave: resumed from %s, written %.1f s ago: %zu leaves (%zu semantic)",
-           path.c_str(), age_s, tree_->getNumLeafNodes(), tree_->numSemanticNodes());
+  ROS_INFO("autosave: resumed from %s, written %.1f s ago: %zu leaves (%zu semantic) in memory, "
+           "%zu tiles on disk", (use_snapshot ? snapshot.directory : path).c_str(), age_s,
+           tree_->getNumLeafNodes(), tree_->numSemanticNodes(),
+           local_map_ ? local_map_->tilesOnDisk() : size_t(0));
 }
 
+// A snapshot's tiles become the local map's tiles on disk; without a local map that can take
+// them (switched off, another radius) they are merged into the tree: nothing is lost.
+void MappingServer::resumeTiles(const std::vector<std::string>& tiles) {
+  if (local_map_) {
+    try {
+      local_map_->adoptTiles(tiles);
+      return;
+    } catch (const std::runtime_error& e) {
+      ROS_WARN("autosave: %s; the snapshot's tiles are merged into the map in memory", e.what());
+    }
+  }
+  for (const std::string& tile : tiles) {
+    try {
+      tree_->merge(*evidential_octomap::loadMap(tile));
+    } catch (const std::exception& e) {
+      ROS_ERROR("autosave: %s; that tile's part of the map is lost", e.what());
+      recordError(std::string("autosave tile not resumed: ") + e.what());
+    }
+  }
+  restartLocalMap();
+}
+
+// At most a tenth of the node's time goes to the autosave's hold of the map lock: a map that
+// takes long to serialise is saved less often than the period (logged), never more often.
 void MappingServer::autosaveLoop() {
-  const auto period = std::chrono::duration<double>(config_.autosave_period);
+  constexpr double kPeriodPerStall = 10.0;
+  double stall_s = 0.0;
   std::unique_lock<std::mutex> lock(autosave_mutex_);
   while (!stopping_) {
-    if (autosave_cv_.wait_for(lock, period, [this] { return stopping_; })) break;
+    const double wait_s = std::max(config_.autosave_period, kPeriodPerStall * stall_s);
+    if (wait_s > config_.autosave_period) {
+      ROS_INFO_THROTTLE(300.0, "autosave: the map lock was held %.1f s; next autosave in %.0f s "
+                        "(~autosave_period %g s), to keep mapping stalled < 10 %% of the time",
+                        stall_s, wait_s, config_.autosave_period);
+    }
+    const auto wait = std::chrono::duration<double>(wait_s);
+    if (autosave_cv_.wait_for(lock, wait, [this] { return stopping_; })) break;
     lock.unlock();
-    autosaveOnce();
+    stall_s = autosaveOnce() / 1000.0;
     lock.lock();
   }
 }
 
 // The map is serialised under the map lock (inserts wait for that long: the stall, reported on
-// ~status) and written outside it: a slow or full disk never holds up mapping.
-void MappingServer::autosaveOnce() {
-  std::string bytes, problem;
+// ~status) and written outside it: a slow or full disk never holds up mapping. Returns the
+// stall [ms] (0 when there was nothing new to save).
+double MappingServer::autosaveOnce() {
+  std::string bytes, problem, staging;
   uint64_t changes = 0;
   double stall_ms = 0.0;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     changes = map_changes_;
-    if (autosaved_once_ && changes == autosaved_changes_) return;  // nothing new to save
+    if (autosaved_once_ && changes == autosaved_changes_) return 0.0;  // nothing new to save
     const auto t0 = std::chrono::steady_clock::now();
-    const std::unique_ptr<EvidentialOcTree> global = globalMap();  // with tiles on disk
-    const EvidentialOcTree& map = global ? *global : *tree_;
-    problem = map.parameterProblem();
+    problem = tree_->parameterProblem();
+    try {
+      if (problem.empty() && local_map_) staging = stageLocalMapSnapshot(*local_map_, snapshotBase());
+    } catch (const std::exception& e) {
+      problem = e.what();
+    }
     if (problem.empty()) {
       std::ostringstream s;
       s << std::setprecision(17);  // as saveMap: the same bytes
-      if (!map.write(s) || !s.good()) problem = "the map could not be serialised";
+      if (!tree_->write(s) || !s.good()) problem = "the map could not be serialised";
       bytes = s.str();
     }
     stall_ms = msSince(t0);
   }
+  std::string written = config_.autosave_path;
   try {
-    if (!problem.empty()) throw std::runtime_error("cannot save " + config_.autosave_path + ": " +
-                                                   problem);
-    writeFileAtomically(config_.autosave_path, bytes);
+    if (!problem.empty()) throw std::runtime_error("cannot save " + written + ": " + problem);
+    if (staging.empty())
+      writeFileAtomically(written, bytes);
+    else
+      written = commitLocalMapSnapshot(staging, bytes, snapshotBase());
   } catch (const std::exception& e) {
+    std::error_code ec;
+    if (!staging.empty()) std::filesystem::remove_all(staging, ec);  // (a failed commit did)
     {
       std::lock_guard<std::mutex> lock(status_mutex_);
       ++status_.autosaves_failed;
@@ -818,7 +905,7 @@ void MappingServer::autosaveOnce() {
     }
     ROS_ERROR_THROTTLE(10.0, "autosave failed: %s; mapping goes on, the previous autosave is kept",
                        e.what());
-    return;
+    return stall_ms;
   }
   autosaved_changes_ = changes;
   const bool first = !autosaved_once_;
@@ -830,12 +917,13 @@ void MappingServer::autosaveOnce() {
     status_.max_autosave_stall_ms = std::max(status_.max_autosave_stall_ms, stall_ms);
   }
   if (first) {
-    ROS_INFO("autosave: wrote %s (%zu bytes; map lock held %.1f ms)", config_.autosave_path.c_str(),
+    ROS_INFO("autosave: wrote %s (%zu bytes; map lock held %.1f ms)", written.c_str(),
              bytes.size(), stall_ms);
   } else {
-    ROS_DEBUG("autosave: wrote %s (%zu bytes; map lock held %.1f ms)",
-              config_.autosave_path.c_str(), bytes.size(), stall_ms);
+    ROS_DEBUG("autosave: wrote %s (%zu bytes; map lock held %.1f ms)", written.c_str(),
+              bytes.size(), stall_ms);
   }
+  return stall_ms;
 }
 
 // A setting the core refuses (or a kernel the machine cannot afford) is not applied: the values

@@ -115,13 +115,17 @@ class MappingServer {
   void recordMapSize();
   // Autosave (~autosave_period): the thread, one autosave, and the resume at start-up.
   void autosaveLoop();
-  void autosaveOnce();
+  double autosaveOnce();  // the map lock's hold [ms]
   void resumeFromAutosave();
+  void resumeTiles(const std::vector<std::string>& tiles);
+  std::string snapshotBase() const;  // where the autosave of a local map goes
   static std::string defaultAutosavePath(const std::string& map_file);
   // A new local map over tree_ in a fresh tile subdirectory, after tree_ changes (map mutex
   // held); none when ~local_map/radius is 0. Throws what LocalMap's constructor throws.
   void startLocalMap();
   void restartLocalMap();  // startLocalMap, or none when it throws (logged, on ~status)
+  void stopLocalMap();     // none, its tile directory deleted
+  static void removeTilesOfDeadNodes(const std::string& base);
   void followLocalMap(const geometry_msgs::Vector3& origin_W);
   // The whole map: tree_, or with a local map the tree merged with its tiles (map mutex held).
   std::unique_ptr<EvidentialOcTree> globalMap() const;

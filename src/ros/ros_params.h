@@ -46,7 +46,8 @@ struct NodeConfig {
   // Autosave: every autosave_period s (0: off) the map is written atomically to autosave_path
   // (default: beside ~map_file as <stem>.autosave.ot, else $ROS_HOME (~/.ros)/evidential_octomap/
   // <node name>.autosave.ot); at start-up with resume_from_autosave (default: on when autosave
-  // is) the node resumes from that file when it exists.
+  // is) the node resumes from that file when it exists. With a local map the autosave is a
+  // snapshot directory <autosave_path>.local_map/ (local_map_snapshot.h).
   double autosave_period = 0.0;
   std::string autosave_path;
   bool resume_from_autosave = false;

@@ -192,11 +192,27 @@ class AutosaveRecoveryTest(unittest.TestCase):
             shutil.rmtree(cls.dir, ignore_errors=True)
 
     def test_kill_minus_9_at_random_moments_resumes_from_the_newest_autosave(self):
-        autosave = os.path.join(self.dir, "kill", "map.autosave.ot")
-        log_path = os.path.join(self.dir, "kill_node.log")
+        self.kill_and_resume("kill", {}, ["map.autosave.ot"])
+
+    def test_kill_minus_9_of_a_local_map_resumes_from_the_newest_snapshot(self):
+        # Scans 0.6 m apart, 3 m above the sensor: with a 3.5 m range and an 8 m radius, tiles
+        # of 3.2 m leave for disk within seconds and the snapshot holds links of them.
+        tiles = os.path.join(self.dir, "kill_local_tiles")
+        self.kill_and_resume("kill_local", {"sensor_model/max_range": 3.5, "local_map/radius": 8.0,
+                                            "local_map/tile_directory": tiles},
+                             ["map.autosave.ot.local_map"])
+        snapshots = files(os.path.join(self.dir, "kill_local", "map.autosave.ot.local_map"))
+        self.assertEqual(len(snapshots), 1, snapshots)
+        self.assertTrue(snapshots[0].startswith("snapshot_"), snapshots)
+        # The killed nodes' tile directories went at the next start, the last one's at its stop.
+        self.assertEqual(files(tiles), [])
+
+    def kill_and_resume(self, name, extra_params, files_left):
+        autosave = os.path.join(self.dir, name, "map.autosave.ot")
+        log_path = os.path.join(self.dir, name + "_node.log")
         params = dict(autosave_period=PERIOD, autosave_path=autosave, insert_queue_size=100,
-                      publish_rate=1.0)
-        feeder = Feeder("autosave_kill")
+                      publish_rate=1.0, **extra_params)
+        feeder = Feeder("autosave_" + name)
         rng = random.Random(20261201)
         g = 0                # next scan index
         resumed = 0          # scans in the map at the last start
@@ -204,8 +220,8 @@ class AutosaveRecoveryTest(unittest.TestCase):
         report = os.environ.get("EVIDENTIAL_AUTOSAVE_REPORT")
         for kill in range(KILLS + 1):
             before = open(log_path).read() if os.path.exists(log_path) else ""
-            had_autosave = os.path.exists(autosave)
-            node = Node("autosave_kill", log_path, **params)
+            had_autosave = any(os.path.exists(autosave + e) for e in ("", ".local_map"))
+            node = Node("autosave_" + name, log_path, **params)
             try:
                 self.assertTrue(feeder.wait_connected())
                 if kill > 0:
@@ -232,7 +248,7 @@ class AutosaveRecoveryTest(unittest.TestCase):
                                          "kill %d: %d scans (%.2f s) lost" % (kill, lost, span))
                     if report:
                         with open(report, "a") as f:
-                            f.write(json.dumps({"kill": kill, "lost_scans": lost,
+                            f.write(json.dumps({"mode": name, "kill": kill, "lost_scans": lost,
                                                 "lost_s": round(span, 3),
                                                 "resumed_scans": resumed_now}) + "\n")
                     resumed = resumed_now
@@ -256,15 +272,18 @@ class AutosaveRecoveryTest(unittest.TestCase):
                 if node is not None:
                     node.stop()
         # Started once more: it autosaves and removes whatever a killed writer left.
-        node = Node("autosave_kill", log_path, **params)
+        node = Node("autosave_" + name, log_path, **params)
         self.assertTrue(feeder.wait_connected())
         feeder.publish(g)
         self.assertIsNotNone(node.wait_status(lambda s: s.autosaves_written >= 1, 10 * PERIOD + 30))
+        tiles_on_disk = node.status.local_map_tiles_on_disk
         node.stop()
-        self.assertEqual(files(os.path.dirname(autosave)), ["map.autosave.ot"])
+        self.assertEqual(files(os.path.dirname(autosave)), files_left)
+        if extra_params:
+            self.assertGreater(tiles_on_disk, 0, "no tile left memory: the snapshot held none")
         if lost_seconds:
-            print("[autosave] %d kills, period %.1f s: seconds lost mean %.2f, max %.2f; scans "
-                  "lost mean %.1f, max %d; republished %s" % (len(lost_seconds), PERIOD,
+            print("[autosave %s] %d kills, period %.1f s: seconds lost mean %.2f, max %.2f; scans "
+                  "lost mean %.1f, max %d; republished %s" % (name, len(lost_seconds), PERIOD,
                                               sum(lost_seconds) / len(lost_seconds),
                                               max(lost_seconds),
                                               sum(lost_scans) / len(lost_scans), max(lost_scans),
