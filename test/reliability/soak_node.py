@@ -3,6 +3,7 @@
 
     python3 test/reliability/soak_node.py --minutes 30 --out build/soak [--autosave-period 10]
     python3 test/reliability/soak_node.py --plot build/soak/samples.csv docs/figures/soak.png
+    python3 test/reliability/soak_node.py --plot build/on/samples.csv build/off/samples.csv on_off.png
 
 Starts its own roscore (a free port) and the node (rosrun, from the sourced catkin workspace),
 then replays a sequence (--data: by default the bundled scans, data/semantickitti_08_first10; one-hot
@@ -12,7 +13,7 @@ as fast as the node sustains: the next scan is published as soon as fewer than t
 (closed loop, so the node is never idle and the queue never overflows by design). Every 10 s the
 node's ~status (clouds inserted, dropped, queue length, last / mean insert time, map leaves and
 memory, autosave stall) and its RSS (/proc/<pid>/status VmRSS) are written to samples.csv; at the
-end a summary to summary.json. --plot draws the CSV to a PNG (python3-matplotlib).
+end a summary to summary.json. --plot draws one or more CSVs (overlaid) to a PNG (matplotlib).
 """
 import argparse
 import csv
@@ -96,7 +97,8 @@ def soak(args):
         node_args = ["rosrun", "evidential_octomap", "evidential_mapping_node",
                      "cloud_in:=/velodyne_points", "_insert_queue_size:=2",
                      "_autosave_period:=%g" % args.autosave_period,
-                     "_autosave_path:=%s" % os.path.join(args.out, "autosave.ot")]
+                     "_autosave_path:=%s" % os.path.join(args.out, "autosave.ot"),
+                     "_classes:=%s" % os.path.abspath(args.classes)]
         node_args += args.node_param
         log = open(os.path.join(args.out, "node.log"), "w")
         node = subprocess.Popen(node_args, stdout=log, stderr=subprocess.STDOUT)
@@ -130,7 +132,8 @@ def soak(args):
         fields = ["t_s", "published", "inserted", "dropped_queue", "dropped_invalid", "dropped_tf",
                   "queue_length", "last_insert_ms", "mean_insert_ms", "map_leaves",
                   "map_semantic_leaves", "map_memory_mb", "rss_mb", "autosaves_written",
-                  "autosaves_failed", "last_autosave_stall_ms", "max_autosave_stall_ms"]
+                  "autosaves_failed", "last_autosave_stall_ms", "max_autosave_stall_ms",
+                  "local_map_tiles_on_disk"]
         samples = open(os.path.join(args.out, "samples.csv"), "w", newline="")
         writer = csv.writer(samples)
         writer.writerow(fields)
@@ -162,7 +165,7 @@ def soak(args):
                                  round(s.map_memory_bytes / 1e6, 2), round(rss_mb(node.pid), 1),
                                  s.autosaves_written, s.autosaves_failed,
                                  round(s.last_autosave_stall_ms, 1),
-                                 round(s.max_autosave_stall_ms, 1)])
+                                 round(s.max_autosave_stall_ms, 1), s.local_map_tiles_on_disk])
                 samples.flush()
                 next_sample += args.sample_s
         samples.close()
@@ -190,36 +193,37 @@ def soak(args):
         roscore.wait()
 
 
-def plot(csv_path, png_path):
+def plot(csv_paths, png_path):
+    """One figure; several CSVs (e.g. bounded memory on and off) overlaid, each named by its
+    directory."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    rows = list(csv.DictReader(open(csv_path)))
-    t = [float(r["t_s"]) / 60.0 for r in rows]
-    col = lambda k: [float(r[k]) for r in rows]  # noqa: E731
     fig, ax = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
-    ax[0].plot(t, col("rss_mb"), label="node RSS")
-    ax[0].plot(t, col("map_memory_mb"), label="map memoryUsage()")
-    ax[0].set_ylabel("MB")
-    ax[0].legend(loc="upper left")
-    ax[1].plot(t, col("last_insert_ms"), ".", ms=3, label="last insert")
-    ax[1].plot(t, col("mean_insert_ms"), label="mean insert")
-    ax[1].set_ylabel("insert [ms]")
-    ax[1].legend(loc="upper left")
-    ax[2].plot(t, col("queue_length"), ".", ms=3, label="queue length")
-    drops = [a + b + c for a, b, c in zip(col("dropped_queue"), col("dropped_invalid"),
-                                          col("dropped_tf"))]
-    ax[2].plot(t, drops, label="clouds dropped (total)")
-    ax[2].set_ylabel("clouds")
-    ax[2].legend(loc="upper left")
-    ax[3].plot(t, col("map_leaves"), label="map leaves")
-    ax[3].set_ylabel("leaves")
-    ax3 = ax[3].twinx()
-    ax3.plot(t, col("inserted"), color="tab:orange", label="scans inserted")
-    ax3.set_ylabel("scans inserted")
+    for n, path in enumerate(csv_paths):
+        rows = list(csv.DictReader(open(path)))
+        t = [float(r["t_s"]) / 60.0 for r in rows]
+        col = lambda k: [float(r[k]) for r in rows]  # noqa: E731
+        run = os.path.basename(os.path.dirname(os.path.abspath(path)))
+        tag = (run + ": ") if len(csv_paths) > 1 else ""
+        colour = "C%d" % n
+        ax[0].plot(t, col("rss_mb"), color=colour, label=tag + "node RSS")
+        ax[0].plot(t, col("map_memory_mb"), "--", color=colour, label=tag + "map memoryUsage()")
+        ax[1].plot(t, col("last_insert_ms"), ".", ms=3, color=colour, label=tag + "last insert")
+        ax[1].plot(t, col("mean_insert_ms"), color=colour, label=tag + "mean insert")
+        drops = [a + b + c for a, b, c in zip(col("dropped_queue"), col("dropped_invalid"),
+                                              col("dropped_tf"))]
+        ax[2].plot(t, col("queue_length"), ".", ms=3, color=colour, label=tag + "queue length")
+        ax[2].plot(t, drops, color=colour, label=tag + "clouds dropped (total)")
+        ax[3].plot(t, col("map_leaves"), color=colour, label=tag + "map leaves (in memory)")
+        ax[3].plot(t, col("inserted"), ":", color=colour, label=tag + "scans inserted")
+    for a, unit in zip(ax, ("MB", "insert [ms]", "clouds", "count")):
+        a.set_ylabel(unit)
+        a.legend(loc="upper left", fontsize=7)
+    ax[3].set_yscale("log")
     ax[3].set_xlabel("minutes")
-    fig.suptitle("evidential_mapping_node soak (%s): forth and back, closed loop"
-                 % os.path.basename(os.path.dirname(os.path.abspath(csv_path))))
+    runs = ", ".join(os.path.basename(os.path.dirname(os.path.abspath(p))) for p in csv_paths)
+    fig.suptitle("evidential_mapping_node soak (%s): forth and back, closed loop" % runs)
     fig.tight_layout()
     fig.savefig(png_path, dpi=90)
 
@@ -235,10 +239,13 @@ def main():
     p.add_argument("--autosave-period", type=float, default=10.0)
     p.add_argument("--node-param", action="append", default=[],
                    help="extra _name:=value for the node, e.g. _bounded_memory:=true")
-    p.add_argument("--plot", nargs=2, metavar=("CSV", "PNG"))
+    p.add_argument("--plot", nargs="+", metavar="CSV... PNG",
+                   help="plot samples.csv files (overlaid) into PNG")
     args = p.parse_args()
     if args.plot:
-        plot(*args.plot)
+        if len(args.plot) < 2:
+            p.error("--plot needs at least one CSV and the PNG")
+        plot(args.plot[:-1], args.plot[-1])
         return 0
     soak(args)
     return 0
