@@ -166,6 +166,9 @@ void exchangeSettings(dynamic_reconfigure::Config* msg, SemanticConfig* semantic
 
 void toReconfigure(const SemanticConfig& semantic, const EvidentialOcTree& tree,
                    const NodeConfig& node, MappingConfig* rc) {
+  // A default-constructed MappingConfig is uninitialised (the generated struct has no
+  // initialisers) and __toMessage__ reads every field: start from the generated defaults.
+  *rc = MappingConfig::__getDefault__();
   dynamic_reconfigure::Config msg;
   rc->__toMessage__(msg);
   SemanticConfig values = semantic;
