@@ -198,9 +198,19 @@ else
     echo "test.sh: catkin run_tests ran in $((SECONDS - t0)) s (exit ${run_tests_rc};" \
       "catkin_test_results decides)"
     set +e
-    catkin_test_results "${ws}/build/test_results" --verbose 2>&1 | tee "${logs}/catkin_test_results.log"
+    # --all names the result files it cannot read ('Skipping "x.xml": ...'), which it otherwise
+    # leaves out of the summary: a test process that died before writing its results (rostest
+    # still reports its launch as passed). Each counts as a failure.
+    catkin_test_results "${ws}/build/test_results" --verbose --all 2>&1 |
+      tee "${logs}/catkin_test_results.log"
     results_rc=${PIPESTATUS[0]}
     set -e
+    unreadable="$(grep -c '^Skipping "' "${logs}/catkin_test_results.log" || true)"
+    if ((unreadable > 0)); then
+      grep '^Skipping "' "${logs}/catkin_test_results.log"
+      stage_failed "catkin: ${unreadable} unreadable result file(s)"
+      failed=$((failed + unreadable))
+    fi
     if ! count_catkin "${logs}/catkin_test_results.log"; then
       stage_failed "catkin_test_results (no summary)"
       failed=$((failed + 1))
