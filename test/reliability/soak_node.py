@@ -20,6 +20,7 @@ import csv
 import importlib.util
 import json
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -184,9 +185,11 @@ def soak(args):
         print(json.dumps(summary, indent=2))
     finally:
         if node is not None:
-            node.terminate()
+            # SIGINT, as roslaunch stops a node: its clean shutdown (the last autosave; under
+            # ASan, the leak check) runs; SIGTERM would end it without.
+            node.send_signal(signal.SIGINT)
             try:
-                node.wait(60)
+                node.wait(120)
             except subprocess.TimeoutExpired:
                 node.kill()
         roscore.terminate()
