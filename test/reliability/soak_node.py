@@ -102,7 +102,9 @@ def soak(args):
                      "_classes:=%s" % os.path.abspath(args.classes)]
         node_args += args.node_param
         log = open(os.path.join(args.out, "node.log"), "w")
-        node = subprocess.Popen(node_args, stdout=log, stderr=subprocess.STDOUT)
+        node_env = dict(os.environ)
+        node_env.update(v.split("=", 1) for v in args.node_env)
+        node = subprocess.Popen(node_args, stdout=log, stderr=subprocess.STDOUT, env=node_env)
 
         reader = player.DatasetReader(args.data, args.classes, "predictions")
         names = player.load_class_table(args.classes)[0]
@@ -241,7 +243,10 @@ def main():
     p.add_argument("--sample-s", type=float, default=10.0)
     p.add_argument("--autosave-period", type=float, default=10.0)
     p.add_argument("--node-param", action="append", default=[],
-                   help="extra _name:=value for the node, e.g. _bounded_memory:=true")
+                   help="extra _name:=value for the node, e.g. _local_map/radius:=60")
+    p.add_argument("--node-env", action="append", default=[], metavar="NAME=VALUE",
+                   help="set in the node's environment only, e.g. LD_LIBRARY_PATH of a "
+                        "sanitized workspace")
     p.add_argument("--plot", nargs="+", metavar="CSV... PNG",
                    help="plot samples.csv files (overlaid) into PNG")
     args = p.parse_args()
