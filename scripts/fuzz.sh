@@ -29,6 +29,8 @@ OMP_NUM_THREADS=1 "$build/make_seeds" "$seeds" "$repo" >/dev/null
 corpus="$build/corpus_$target"
 mkdir -p "$corpus" "$build/artifacts"
 cp -n "$seeds/$target"/* "$corpus/" 2>/dev/null || true
+# Kept inputs (findings and coverage) start every run.
+cp -n "$repo/fuzz/regressions/$target"/* "$corpus/" 2>/dev/null || true
 
 export OMP_NUM_THREADS=1                 # one fuzz job = one core
 export ASAN_OPTIONS="${ASAN_OPTIONS:-malloc_context_size=4:detect_leaks=1}"
