@@ -27,14 +27,15 @@ class LogOddsTable {
     const uint32_t bits = bitsOf(value);
     if (bits == last_) return;  // runs of equal values are common (free space)
     last_ = bits;
-    uint32_t& key = keys_[find(bits)];
-    if (key != kEmpty) return;
+    const size_t slot = find(bits);
+    if (keys_[slot] != kEmpty) return;
     if (values_.size() == kMaxValues) {
       overflow_ = true;
       return;
     }
-    key = bits;
+    keys_[slot] = bits;
     values_.push_back(value);
+    if (2 * values_.size() > keys_.size()) grow();
   }
 
   // The order of the file's table: increasing, -0 before +0.
@@ -44,6 +45,7 @@ class LogOddsTable {
   void finish() {
     if (overflow_) return values_.clear();
     std::sort(values_.begin(), values_.end(), before);
+    codes_.assign(keys_.size(), 0);
     for (uint32_t i = 0; i < values_.size(); ++i) codes_[find(bitsOf(values_[i]))] = i;
   }
 
@@ -55,7 +57,9 @@ class LogOddsTable {
 
  private:
   static constexpr uint32_t kEmpty = 0xFFFFFFFFu;  // a NaN: never a key (add() stops at NaN)
-  static constexpr int kSlotBits = 17;             // 2^17 slots: at most half full
+  // The hash table starts small (a map's tile or a tiny map is written often) and doubles to
+  // stay at most half full: 2^17 slots for kMaxValues.
+  static constexpr int kInitialSlotBits = 8;
 
   static uint32_t bitsOf(float value) {
     uint32_t bits;
@@ -64,13 +68,23 @@ class LogOddsTable {
   }
   // The slot of `bits`, or the empty slot where it would go (linear probing).
   size_t find(uint32_t bits) const {
-    size_t slot = (bits * 0x9E3779B1u) >> (32 - kSlotBits);
+    size_t slot = (bits * 0x9E3779B1u) >> (32 - slot_bits_);
     while (keys_[slot] != kEmpty && keys_[slot] != bits) slot = (slot + 1) & (keys_.size() - 1);
     return slot;
   }
 
-  std::vector<uint32_t> keys_ = std::vector<uint32_t>(size_t(1) << kSlotBits, kEmpty);
-  std::vector<uint32_t> codes_ = std::vector<uint32_t>(size_t(1) << kSlotBits, 0);
+  void grow() {
+    std::vector<uint32_t> old(keys_.size() * 2, kEmpty);
+    old.swap(keys_);
+    ++slot_bits_;
+    for (uint32_t bits : old) {
+      if (bits != kEmpty) keys_[find(bits)] = bits;
+    }
+  }
+
+  int slot_bits_ = kInitialSlotBits;
+  std::vector<uint32_t> keys_ = std::vector<uint32_t>(size_t(1) << kInitialSlotBits, kEmpty);
+  std::vector<uint32_t> codes_;  // filled by finish()
   std::vector<float> values_;
   uint32_t last_ = kEmpty;
   bool overflow_ = false;
