@@ -43,9 +43,9 @@ class LogOddsTable {
 
   // Sorts the values and indexes them.
   void finish() {
+    codes_.assign(keys_.size(), 0);
     if (overflow_) return values_.clear();
     std::sort(values_.begin(), values_.end(), before);
-    codes_.assign(keys_.size(), 0);
     for (uint32_t i = 0; i < values_.size(); ++i) codes_[find(bitsOf(values_[i]))] = i;
   }
 
