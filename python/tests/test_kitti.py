@@ -1,5 +1,6 @@
 """The module on the bundled SemanticKITTI scans (evidence derived from hard labels): metrics
 recomputed in numpy, parity with the CLI, and inserts that release the GIL."""
+import json
 import os
 import subprocess
 import threading
@@ -117,3 +118,41 @@ def test_insert_scan_releases_the_gil(kitti_scans, kitti_classes):
     worker.join()
     during = [t for t in ticks if span["start"] < t < span["end"]]
     assert len(during) > 100  # with the GIL held the main thread could not run at all
+
+
+@pytest.mark.skipif(cli_binary() is None, reason="the CLI is built by scripts/test.sh (build/core)")
+def test_compare_voxel_majority_iou_equals_a_numpy_recomputation(tmp_path, kitti_scans,
+                                                                 kitti_classes):
+    """compare.json's per-class voxel_majority_iou: the majority of the mapped points'
+    predictions in each query's 0.2 m voxel (ties to the lowest class, ignore class not
+    counted), IoU over all queries."""
+    subprocess.run([str(cli_binary()), "compare", "-q", "--no-rellis", "--scans", "2",
+                    "--sources", "onehot", "--protocols", "reconstruction", "--variants",
+                    "dempster", "--bootstrap-replicates", "10", "--data", str(KITTI), "--classes",
+                    str(REPO / "config" / "classes_semantickitti.yaml"), "--out", str(tmp_path)],
+                   check=True, capture_output=True)
+    with open(tmp_path / "compare.json") as f:
+        per_class = json.load(f)["runs"][0]["per_class"]
+    ignore, C = kitti_classes.ignore_class, 20
+    points = np.vstack([s.points_world() for s, _ in kitti_scans[:2]]).astype(np.float32)
+    predicted = np.concatenate([s.predicted for s, _ in kitti_scans[:2]])
+    gt = np.concatenate([s.gt for s, _ in kitti_scans[:2]])
+    keys = np.floor(points.astype(np.float64) * (1 / 0.2)).astype(np.int64)  # OctoMap coordToKey
+    _, voxel = np.unique(keys, axis=0, return_inverse=True)
+    voxel = voxel.ravel()
+    counts = np.zeros((voxel.max() + 1, C), np.int64)
+    counted = predicted != ignore
+    np.add.at(counts, (voxel[counted], predicted[counted]), 1)
+    majority = np.where(counts.max(axis=1) > 0, counts.argmax(axis=1), -1)[voxel]
+    query = gt != ignore
+    checked = 0
+    for c in per_class:
+        k = c["class"]
+        union = ((majority == k) | (gt == k))[query].sum()
+        if union == 0:
+            assert c["voxel_majority_iou"] is None
+            continue
+        expected = ((majority == k) & (gt == k))[query].sum() / union
+        assert c["voxel_majority_iou"] == pytest.approx(expected, abs=1e-3), c["name"]
+        checked += 1
+    assert checked >= 8

@@ -69,6 +69,18 @@ def thin_classes(run):
             if c["gt_queries"] >= THIN_MIN_QUERIES and c["map_iou_all_queries"] < c["input_iou"]]
 
 
+def majority_note(run, c):
+    """The voxel majority of the hard predictions (no kernel) for a class, when it too is below
+    the input: then the voxel size, not the kernel, bounds that class. Only where the input's
+    labels are those predictions (learned evidence has labels of its own)."""
+    m = c.get("voxel_majority_iou")
+    if run["evidence_source"] == "learned":
+        return ""
+    if m is None or m >= c["input_iou"]:
+        return ""
+    return " (voxel majority %.1f)" % (100 * m)
+
+
 def targets(section):
     """One row of the targets table for the dempster map of a section, and whether all are met."""
     runs, boot = section["runs"], section["bootstrap"]
@@ -89,7 +101,8 @@ def targets(section):
     reconstruction = runs["dempster"]["protocol"] == "reconstruction"
     thin = thin_classes(runs["dempster"]) if reconstruction else None
     thin_cell = "–" if thin is None else (", ".join(
-        "%s %.1f < %.1f" % (c["name"], 100 * c["map_iou_all_queries"], 100 * c["input_iou"])
+        "%s %.1f < %.1f%s" % (c["name"], 100 * c["map_iou_all_queries"], 100 * c["input_iou"],
+                              majority_note(runs["dempster"], c))
         for c in thin) or "none")
     checks = [ece_ok, not better_brier, auroc_ok, not better_miou, not thin]
     mark = lambda ok: "" if ok else " **✗**"

@@ -2,6 +2,7 @@
 // data, evidence and queries; one markdown table per dataset/protocol, plus JSON. Also the
 // RELLIS-3D scan with synthetic noisy predictions (off-road class set).
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -51,6 +52,7 @@ struct Section {
 struct ScoredRow {
   std::string name;
   BlockScores scores;
+  std::vector<double> iou;  // per class over all queries (reference rows only)
 };
 
 // One reference row: metrics of the answers, a table row and its block scores.
@@ -62,7 +64,9 @@ ScoredRow referenceRow(const std::vector<Query>& answered, const std::string& na
   sec->rows.push_back("| – | " + name + " | | |" +
                       qualityCells(q, q.queries ? double(q.labelled) / q.queries : NAN, NAN) +
                       " – | – | – |");
-  return {name, bootstrap.scores(outcomes)};
+  std::vector<double> iou(classes.numClasses());
+  for (int c = 0; c < classes.numClasses(); ++c) iou[c] = q.all.iou(c);
+  return {name, bootstrap.scores(outcomes), iou};
 }
 
 // The reference rows of voxel_majority.h (no rule): the majority of the mapped points'
@@ -208,6 +212,7 @@ class SectionRun {
                                          o_.base.maxSupportLength(), bootstrap_, &sec_)) {
       shared_rows_.push_back(std::move(r));
     }
+    majority_iou_ = shared_rows_[1].iou;  // the voxel majority of the predictions
   }
 
   void runSource(const std::string& source, CompareResults* out) {
@@ -267,6 +272,12 @@ class SectionRun {
     sec_.rows.push_back(row.str());
     sec_.detection_rows.push_back(lead + detectionCells(r.map.quality));
     nlohmann::json j = toJson(r, classes_);
+    // What a voxel map of the network's own hard labels reaches, without any kernel: the bound
+    // that resolution sets on "no class below the input's IoU".
+    for (auto& c : j["per_class"]) {
+      const double iou = majority_iou_[c["class"].get<int>()];
+      c["voxel_majority_iou"] = std::isfinite(iou) ? nlohmann::json(iou) : nlohmann::json(nullptr);
+    }
     j["dataset_label"] = data_.label;
     j["variant_id"] = v;
     out->runs.push_back(j);
@@ -306,6 +317,7 @@ class SectionRun {
   const nlohmann::json context_;
   Section sec_;
   std::vector<ScoredRow> shared_rows_;
+  std::vector<double> majority_iou_;  // per class, the voxel majority of the predictions
 };
 
 // The RELLIS-3D scan and class table: given, else guessed beside --data and --classes.
