@@ -6,6 +6,20 @@
 #include <mutex>
 #include <new>
 
+// LeakSanitizer scans the heap, globals, stacks and TLS, not mmap'd memory: without the chunks
+// registered as root regions, the child arrays and payloads that only nodes point to would be
+// reported as leaked for every tree still alive at exit.
+#if defined(__SANITIZE_ADDRESS__)
+#define EVIDENTIAL_OCTOMAP_LSAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(leak_sanitizer)
+#define EVIDENTIAL_OCTOMAP_LSAN 1
+#endif
+#endif
+#ifdef EVIDENTIAL_OCTOMAP_LSAN
+#include <sanitizer/lsan_interface.h>
+#endif
+
 namespace evidential_octomap {
 namespace {
 
@@ -50,7 +64,17 @@ Chunk* mapChunk() {
   if (aligned + size < begin + 2 * size) {
     munmap(reinterpret_cast<void*>(aligned + size), begin + 2 * size - (aligned + size));
   }
+#ifdef EVIDENTIAL_OCTOMAP_LSAN
+  __lsan_register_root_region(reinterpret_cast<void*>(aligned), size);
+#endif
   return reinterpret_cast<Chunk*>(aligned);
+}
+
+void unmapChunk(Chunk* chunk) {
+#ifdef EVIDENTIAL_OCTOMAP_LSAN
+  __lsan_unregister_root_region(chunk, NodeAllocator::kChunkBytes);
+#endif
+  munmap(chunk, NodeAllocator::kChunkBytes);
 }
 
 class GlobalStore {
@@ -141,7 +165,7 @@ class GlobalStore {
       spare_ = chunk;
       return;
     }
-    munmap(chunk, NodeAllocator::kChunkBytes);
+    unmapChunk(chunk);
     --chunks_;
   }
 
