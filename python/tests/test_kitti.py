@@ -133,7 +133,7 @@ def test_compare_voxel_majority_iou_equals_a_numpy_recomputation(tmp_path, kitti
                    check=True, capture_output=True)
     with open(tmp_path / "compare.json") as f:
         per_class = json.load(f)["runs"][0]["per_class"]
-    ignore, C = kitti_classes.ignore_class, 20
+    ignore, C = kitti_classes.ignore_class, kitti_classes.num_classes
     points = np.vstack([s.points_world() for s, _ in kitti_scans[:2]]).astype(np.float32)
     predicted = np.concatenate([s.predicted for s, _ in kitti_scans[:2]])
     gt = np.concatenate([s.gt for s, _ in kitti_scans[:2]])
