@@ -411,7 +411,11 @@ int fuzzMapServices(const uint8_t* data, size_t size) {
         require(finite || node == nullptr, "nodeAt found a node for a non-finite point");
         checkOpinion(tree, node, "query");
         const VoxelOpinion o = tree.query(p);
-        require(o.label == tree.opinion(node).label, "query(point) disagrees with nodeAt");
+        // Unknown space has no answer; a voxel with evidence answers its own; a known voxel
+        // without any answers from the evidence around it (query_support.cpp).
+        const bool own = node == nullptr || node->hasSemantics();
+        require(!own || o.label == tree.opinion(node).label, "query(point) disagrees with nodeAt");
+        require(o.label >= -1 && o.label < tree.numClasses(), "query(point) label out of range");
         break;
       }
       case 1: {  // ~clear_bbx

@@ -169,7 +169,14 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // Use it instead of OctoMap's search(point), which casts coordinate / resolution to int first:
   // undefined behaviour for NaN, inf and points beyond the map's extent, answered nullptr here.
   const EvidentialOcTreeNode* nodeAt(const octomap::point3d& point_W) const;
-  VoxelOpinion query(const octomap::point3d& point_W) const;  // opinion(nodeAt(point_W))
+  // The map's answer at a point: the opinion of its voxel's own evidence, or, for a known voxel
+  // without any (free space off the surface), the answer of the voxels with evidence within a
+  // point's full kernel support (query_support.cpp); vacuous (label -1) in unknown space.
+  VoxelOpinion query(const octomap::point3d& point_W) const;
+  VoxelOpinion answer(const octomap::OcTreeKey& key) const;
+  // The same answer as payload values (C floats into `out`); false where there is none.
+  bool answerPayload(const octomap::OcTreeKey& key, float* out) const;
+  // The node's own opinion at `key` and depth (OctoMap's search), without the support answer.
   VoxelOpinion query(const octomap::OcTreeKey& key, unsigned depth = 0) const;
   // The node's C floats (rule-specific, see fusion_rule.h) decoded into `out` (room for C
   // floats); false, leaving `out` untouched, if it has none (or node is null). For an inner
@@ -228,6 +235,11 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   friend class detail::TreeEditing;  // the editing calls below, for readers, tests and fuzzing
 
   void setNumClasses(int num_classes);
+  // The support answer of a voxel without evidence (query_support.cpp): the support length of a
+  // point without uncertainty, the voxels it spans, and the kernel-weighted values.
+  double queryLength() const;
+  int querySupportReach() const;
+  bool supportPayload(const octomap::OcTreeKey& key, float* out) const;
   // Editing: detail/tree_editing.h says what each does.
   EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);
   void setPayload(EvidentialOcTreeNode* leaf, const float* values);

@@ -204,7 +204,7 @@ QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const Lo
   const auto answer = [&](size_t i, const EvidentialOcTree& map) {
     const octomap::point3d point(p(i, 0), p(i, 1), p(i, 2));
     const EvidentialOcTreeNode* node = map.nodeAt(point);  // NaN / far away: unknown
-    const VoxelOpinion o = map.opinion(node);
+    const VoxelOpinion o = map.query(point);  // off the surface: the support answer
     labels[i] = o.label;
     uncertainty[i] = o.uncertainty;
     conflict[i] = o.conflict;

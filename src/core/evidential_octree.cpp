@@ -256,7 +256,8 @@ const EvidentialOcTreeNode* EvidentialOcTree::nodeAt(const octomap::point3d& poi
 }
 
 VoxelOpinion EvidentialOcTree::query(const octomap::point3d& point_W) const {
-  return opinion(nodeAt(point_W));
+  octomap::OcTreeKey key;
+  return safeCoordToKey(*this, point_W, &key) ? answer(key) : opinion(nullptr);
 }
 
 VoxelOpinion EvidentialOcTree::query(const octomap::OcTreeKey& key, unsigned depth) const {

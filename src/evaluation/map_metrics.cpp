@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "evidential_octomap/evaluation/metrics.h"
+#include "evidential_octomap/safe_key.h"
 
 namespace evidential_octomap {
 
@@ -77,10 +78,14 @@ MapMetrics evaluateMap(const EvidentialOcTree& tree, const std::vector<Query>& q
   for (size_t i = 0; i < queries.size(); ++i) {
     const Query& q = queries[i];
     if (q.gt < 0 || q.gt >= num_classes || q.gt == ignore_class) continue;
-    const EvidentialOcTreeNode* node = tree.nodeAt(q.point_W);
+    octomap::OcTreeKey key;
+    const bool inside = safeCoordToKey(tree, q.point_W, &key);
+    const EvidentialOcTreeNode* node = inside ? tree.search(key) : nullptr;
     if (node != nullptr && tree.isNodeOccupied(node)) ++m.occupied;
-    const bool labelled = node != nullptr && node->hasSemantics();
-    const Answer a = labelled ? answerOf(tree.opinion(node), tree.rule()) : Answer();
+    float values[EvidentialOcTree::kMaxClasses];
+    const bool labelled = inside && tree.answerPayload(key, values);
+    const Answer a =
+        labelled ? answerOf(tree.rule().readout(values, num_classes), tree.rule()) : Answer();
     acc.add(q.gt, a);
     record(outcomes, i, q.gt, a, num_classes);
   }

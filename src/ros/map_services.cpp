@@ -22,7 +22,7 @@ void answerQuery(const EvidentialOcTree& tree, const QueryMap::Request& req,
   for (const auto& p : req.points) {
     const EvidentialOcTree& map = local ? local->mapAt(toPoint(p)) : tree;
     const EvidentialOcTreeNode* node = map.nodeAt(toPoint(p));
-    const VoxelOpinion o = map.opinion(node);
+    const VoxelOpinion o = map.query(toPoint(p));  // off the surface: the support answer
     res->labels.push_back(o.label);
     res->class_names.push_back(o.label >= 0 && o.label < int(names.size()) ? names[o.label] : "");
     res->uncertainties.push_back(o.uncertainty);

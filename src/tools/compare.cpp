@@ -362,9 +362,10 @@ std::string compareMarkdown(const CompareOptions& o, const CompareResults& resul
   std::ostringstream md;
   md << "# compare: fusion rules and the Table II ablation on the same queries\n\n"
      << "Metrics (include/evidential_octomap/evaluation/metrics.h), the same queries (GT-labelled points) "
-        "for every row: mIoU / Acc over **all** queries (a query whose voxel holds no evidence "
-        "counts as wrong) and over labelled ones; sem. cov. = share of queries whose voxel holds "
-        "evidence (the paper's O.Acc); occ. cov. = share whose voxel is occupied; Brier = mean "
+        "for every row: mIoU / Acc over **all** queries (a query the map does not answer "
+        "counts as wrong) and over labelled ones; sem. cov. = share of queries the map answers "
+        "(its voxel's evidence, or the support answer of the voxels with evidence around a known "
+        "voxel without any; the paper's O.Acc); occ. cov. = share whose voxel is occupied; Brier = mean "
         "multi-class Brier score of the projected class probabilities (dempster b + u/C, "
         "sbki/ebs alpha/S, no label: uniform), NLL (p clipped at 1e-6), ECE (10 bins); error "
         "detection: AUROC and AURC of each uncertainty output for \"the label is wrong\" among "

@@ -63,7 +63,7 @@ class HandMadeMap : public ::testing::Test {
   EvidentialOcTree tree{0.5, 3};
   const float l3 = std::log(3.0f);
   const octomap::point3d a{0.25f, 0.25f, 0.25f}, b{1.25f, 0.25f, 0.25f}, f{2.25f, 0.25f, 0.25f},
-      g{3.25f, 0.25f, 0.25f}, unknown{9.f, 9.f, 9.f};
+      g{6.25f, 0.25f, 0.25f}, unknown{9.f, 9.f, 9.f};  // g: beyond every support of f
   std::vector<Query> queries;
   void SetUp() override {
     setVoxel(tree, a, true, {0.0f, l3, 0.0f});   // occupied, says 1

@@ -1,10 +1,12 @@
 // Map and input metrics, one set for every row (the input and each rule), computed
 // on the same queries and defined so anyone can recompute them:
 //   queries     GT-labelled points (ignore class excluded) of the evaluated scans, world frame;
-//   answer      what a row says at a query: the map's voxel opinion (the voxel holds semantic
-//               evidence) or, for the input row, the point's own opinion; "no label" otherwise;
+//   answer      what a row says at a query: the map's answer (EvidentialOcTree::query: the
+//               voxel's own evidence, or for a known voxel without any, the support answer
+//               of the voxels with evidence around it) or, for the input row, the point's own
+//               opinion; "no label" otherwise;
 //   occupancy coverage  share of queries whose voxel is occupied (OctoMap's isNodeOccupied);
-//   semantic coverage   share of queries whose voxel holds evidence (the paper's O.Acc);
+//   semantic coverage   share of queries the map answers (the paper's O.Acc);
 //   mIoU, Acc   over ALL queries (no label = wrong) and over labelled queries; mIoU averages
 //               IoU = TP / (TP + FP + FN) over the classes present in GT;
 //   Brier       mean over all queries of sum_c (p^c - 1[c = gt])^2 of the projected class

@@ -1,0 +1,74 @@
+// Queries off the surface (docs/design.md): a known voxel without evidence of its own is
+// answered from the voxels with evidence within a point's full kernel support around it.
+// Each neighbour's stored values (less the rule's prior) are weighted by the sparse kernel of
+// the distance from the query voxel's centre to the neighbour's cube; the answer is the
+// kernel-weighted mean of those values, discounted by the kernel weight of the nearest one
+// (a voxel next to the surface answers almost as the surface does, one at the edge of the
+// support with little evidence). It is read out only: nothing is stored, so inserts stay
+// order-independent sums and maps stay exactly mergeable.
+#include <algorithm>
+#include <cmath>
+
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/sparse_kernel.h"
+
+namespace evidential_octomap {
+
+int EvidentialOcTree::querySupportReach() const {
+  const double length = queryLength();
+  const double extra = config_.kernel_distance == "voxel" ? 1.0 : 0.5;
+  return static_cast<int>(std::floor(length / resolution + extra));
+}
+
+double EvidentialOcTree::queryLength() const {
+  // The support of a point without uncertainty: the farthest any point reaches.
+  return rule_->usesUncertaintyKernel()
+             ? adaptiveLength(config_.length_scale, config_.beta, config_.effectiveGamma(), 0.0)
+             : config_.length_scale;
+}
+
+bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out) const {
+  const int reach = querySupportReach();
+  const double length = queryLength();
+  const double half = config_.kernel_distance == "voxel" ? resolution / 2.0 : 0.0;
+  const float prior = rule_->prior();
+  double sum[kMaxClasses] = {};
+  double weight_sum = 0.0, nearest = 0.0;
+  float values[kMaxClasses];
+  for (int dz = -reach; dz <= reach; ++dz) {
+    for (int dy = -reach; dy <= reach; ++dy) {
+      for (int dx = -reach; dx <= reach; ++dx) {
+        if (!dx && !dy && !dz) continue;
+        const int x = int(key[0]) + dx, y = int(key[1]) + dy, z = int(key[2]) + dz;
+        if (std::min({x, y, z}) < 0 || std::max({x, y, z}) > 0xFFFF) continue;
+        const double d = distanceToCube(dx * resolution, dy * resolution, dz * resolution, half);
+        const double k = std::min(1.0, sparseKernel(d, length, config_.sigma0));
+        if (!(k > 0.0)) continue;
+        const octomap::OcTreeKey neighbour(x, y, z);
+        if (!payload(search(neighbour), values)) continue;
+        for (int c = 0; c < num_classes_; ++c) sum[c] += k * (double(values[c]) - prior);
+        weight_sum += k;
+        nearest = std::max(nearest, k);
+      }
+    }
+  }
+  if (!(weight_sum > 0.0)) return false;
+  const double scale = nearest / weight_sum;
+  for (int c = 0; c < num_classes_; ++c) out[c] = prior + float(scale * sum[c]);
+  return true;
+}
+
+bool EvidentialOcTree::answerPayload(const octomap::OcTreeKey& key, float* out) const {
+  const EvidentialOcTreeNode* node = search(key);
+  if (!node) return false;  // unknown space: no answer
+  if (payload(node, out)) return true;
+  return supportPayload(key, out);
+}
+
+VoxelOpinion EvidentialOcTree::answer(const octomap::OcTreeKey& key) const {
+  float values[kMaxClasses];
+  if (!answerPayload(key, values)) std::fill_n(values, num_classes_, rule_->prior());
+  return rule_->readout(values, num_classes_);
+}
+
+}  // namespace evidential_octomap

@@ -1,0 +1,119 @@
+// Queries off the surface (query_support.cpp): a known voxel without evidence answers from the
+// voxels with evidence within a point's full support; the expected values are computed here
+// from the kernel formula and the documented weighting, on a map built voxel by voxel.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "evidential_octomap/detail/tree_editing.h"
+#include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/sparse_kernel.h"
+
+namespace evidential_octomap {
+namespace {
+
+constexpr double kRes = 0.2;
+constexpr int kClasses = 3;
+const octomap::OcTreeKey kCentre(32768, 32768, 32768);
+
+octomap::OcTreeKey offset(int dx, int dy, int dz) {
+  return octomap::OcTreeKey(kCentre[0] + dx, kCentre[1] + dy, kCentre[2] + dz);
+}
+
+// A known voxel (occupancy untouched: log-odds 0), with `values` as its payload when given.
+void addVoxel(EvidentialOcTree& tree, const octomap::OcTreeKey& key,
+              const std::vector<float>& values = {}) {
+  EvidentialOcTreeNode* leaf = detail::TreeEditing::leafForUpdate(tree, key, true);
+  ASSERT_NE(leaf, nullptr);
+  if (!values.empty()) detail::TreeEditing::setPayload(tree, leaf, values.data());
+}
+
+// The default support of a point without uncertainty: l * beta * e (semantic_config.h).
+double supportLength() {
+  const SemanticConfig c;
+  return c.length_scale * c.beta * std::exp(1.0);
+}
+
+void expectOpinionOf(const EvidentialOcTree& tree, const VoxelOpinion& got,
+                     const std::vector<float>& payload) {
+  const VoxelOpinion want = tree.rule().readout(payload.data(), kClasses);
+  ASSERT_EQ(got.label, want.label);
+  ASSERT_EQ(got.belief.size(), want.belief.size());
+  for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(got.belief[c], want.belief[c], 1e-6) << c;
+  EXPECT_NEAR(got.uncertainty, want.uncertainty, 1e-6);
+}
+
+class QuerySupport : public ::testing::Test {
+ protected:
+  QuerySupport() : tree(kRes, kClasses) {
+    addVoxel(tree, offset(1, 0, 0), near_values);   // next to the query voxel
+    addVoxel(tree, offset(0, 0, -2), far_values);   // two voxels below it
+    addVoxel(tree, kCentre);                        // the query voxel: known, no evidence
+    addVoxel(tree, offset(10, 0, 0));               // known, beyond every support
+    detail::TreeEditing::updateInnerNodes(tree);
+  }
+  EvidentialOcTree tree;
+  const std::vector<float> near_values{2.0f, 0.0f, 0.0f};
+  const std::vector<float> far_values{0.0f, 3.0f, 0.0f};
+};
+
+TEST_F(QuerySupport, KnownVoxelWithoutEvidenceAnswersTheDiscountedKernelMeanOfItsNeighbours) {
+  // Distances from the query voxel's centre to the neighbours' cubes: 0.1 m and 0.3 m.
+  const double k_near = sparseKernel(0.1, supportLength(), 1.0);
+  const double k_far = sparseKernel(0.3, supportLength(), 1.0);
+  ASSERT_GT(k_far, 0.0);
+  ASSERT_GT(k_near, k_far);
+  std::vector<float> expected(kClasses);
+  for (int c = 0; c < kClasses; ++c)
+    expected[c] = float(k_near * (k_near * near_values[c] + k_far * far_values[c]) /
+                        (k_near + k_far));
+  float got[kClasses];
+  ASSERT_TRUE(tree.answerPayload(kCentre, got));
+  for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(got[c], expected[c], 1e-5) << c;
+  expectOpinionOf(tree, tree.query(tree.keyToCoord(kCentre)), expected);
+  EXPECT_EQ(tree.query(tree.keyToCoord(kCentre)).label, 0);  // the nearer voxel's class
+}
+
+TEST_F(QuerySupport, VoxelWithEvidenceAnswersItsOwnOnly) {
+  expectOpinionOf(tree, tree.query(tree.keyToCoord(offset(1, 0, 0))), near_values);
+  expectOpinionOf(tree, tree.query(tree.keyToCoord(offset(0, 0, -2))), far_values);
+}
+
+TEST_F(QuerySupport, UnknownSpaceAndVoxelsBeyondTheSupportHaveNoAnswer) {
+  float values[kClasses];
+  EXPECT_FALSE(tree.answerPayload(offset(0, 1, 0), values));  // unknown, next to evidence
+  EXPECT_EQ(tree.query(tree.keyToCoord(offset(0, 1, 0))).label, -1);
+  EXPECT_FALSE(tree.answerPayload(offset(10, 0, 0), values));  // known, 1.7 m from evidence
+  EXPECT_EQ(tree.query(tree.keyToCoord(offset(10, 0, 0))).label, -1);
+  EXPECT_EQ(tree.query(octomap::point3d(NAN, 0, 0)).label, -1);
+}
+
+TEST_F(QuerySupport, TheNodesOwnOpinionStaysWithoutTheSupportAnswer) {
+  // opinion(node) and query(key, depth) read what the voxel stores: nothing here.
+  EXPECT_EQ(tree.opinion(tree.search(kCentre)).label, -1);
+  EXPECT_EQ(tree.query(kCentre).label, -1);
+}
+
+TEST(QuerySupportMerge, AnswersOfAMergedMapAreThoseOfItsSummedEvidence) {
+  // The answer is read from the stored sums, so merging maps and then querying equals querying
+  // one map holding the summed evidence.
+  EvidentialOcTree a(kRes, kClasses), b(kRes, kClasses), sum(kRes, kClasses);
+  addVoxel(a, offset(1, 0, 0), {1.0f, 0.5f, 0.0f});
+  addVoxel(b, offset(1, 0, 0), {0.0f, 1.0f, 0.0f});
+  addVoxel(b, offset(-1, 0, 0), {0.0f, 0.0f, 2.0f});
+  addVoxel(sum, offset(1, 0, 0), {1.0f, 1.5f, 0.0f});
+  addVoxel(sum, offset(-1, 0, 0), {0.0f, 0.0f, 2.0f});
+  for (EvidentialOcTree* t : {&a, &b, &sum}) {
+    addVoxel(*t, kCentre);
+    detail::TreeEditing::updateInnerNodes(*t);
+  }
+  a.merge(b);
+  float merged[kClasses], summed[kClasses];
+  ASSERT_TRUE(a.answerPayload(kCentre, merged));
+  ASSERT_TRUE(sum.answerPayload(kCentre, summed));
+  for (int c = 0; c < kClasses; ++c) EXPECT_FLOAT_EQ(merged[c], summed[c]) << c;
+}
+
+}  // namespace
+}  // namespace evidential_octomap
