@@ -1,6 +1,7 @@
-// Queries off the surface (query_support.cpp): a known voxel without evidence answers from the
-// voxels with evidence within a point's full support; the expected values are computed here
-// from the kernel formula and the documented weighting, on a map built voxel by voxel.
+// Queries off the surface (query_support.cpp): in a map that keeps evidence on the surface
+// (semantic_occupied_only), a known voxel without evidence answers from the voxels with
+// evidence within a point's full support; the expected values are computed here from the
+// kernel formula and the documented weighting, on a map built voxel by voxel.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -29,6 +30,12 @@ void addVoxel(EvidentialOcTree& tree, const octomap::OcTreeKey& key,
   if (!values.empty()) detail::TreeEditing::setPayload(tree, leaf, values.data());
 }
 
+SemanticConfig surfaceOnly() {
+  SemanticConfig c;
+  c.semantic_occupied_only = true;
+  return c;
+}
+
 // The default support of a point without uncertainty: l * beta * e (semantic_config.h).
 double supportLength() {
   const SemanticConfig c;
@@ -46,7 +53,7 @@ void expectOpinionOf(const EvidentialOcTree& tree, const VoxelOpinion& got,
 
 class QuerySupport : public ::testing::Test {
  protected:
-  QuerySupport() : tree(kRes, kClasses) {
+  QuerySupport() : tree(kRes, kClasses, surfaceOnly()) {
     addVoxel(tree, offset(1, 0, 0), near_values);   // next to the query voxel
     addVoxel(tree, offset(0, 0, -2), far_values);   // two voxels below it
     addVoxel(tree, kCentre);                        // the query voxel: known, no evidence
@@ -95,10 +102,21 @@ TEST_F(QuerySupport, TheNodesOwnOpinionStaysWithoutTheSupportAnswer) {
   EXPECT_EQ(tree.query(kCentre).label, -1);
 }
 
+TEST_F(QuerySupport, AMapWithEvidenceOffTheSurfaceAnswersOnlyWhatAVoxelHolds) {
+  // The default map keeps evidence in free space near surfaces itself: a voxel without any
+  // (beyond every support, or cleared) has no answer there.
+  tree.setConfig(SemanticConfig());
+  float values[kClasses];
+  EXPECT_FALSE(tree.answerPayload(kCentre, values));
+  EXPECT_EQ(tree.query(tree.keyToCoord(kCentre)).label, -1);
+  expectOpinionOf(tree, tree.query(tree.keyToCoord(offset(1, 0, 0))), near_values);
+}
+
 TEST(QuerySupportMerge, AnswersOfAMergedMapAreThoseOfItsSummedEvidence) {
   // The answer is read from the stored sums, so merging maps and then querying equals querying
   // one map holding the summed evidence.
-  EvidentialOcTree a(kRes, kClasses), b(kRes, kClasses), sum(kRes, kClasses);
+  EvidentialOcTree a(kRes, kClasses, surfaceOnly()), b(kRes, kClasses, surfaceOnly()),
+      sum(kRes, kClasses, surfaceOnly());
   addVoxel(a, offset(1, 0, 0), {1.0f, 0.5f, 0.0f});
   addVoxel(b, offset(1, 0, 0), {0.0f, 1.0f, 0.0f});
   addVoxel(b, offset(-1, 0, 0), {0.0f, 0.0f, 2.0f});

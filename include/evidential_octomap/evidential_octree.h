@@ -169,9 +169,10 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // Use it instead of OctoMap's search(point), which casts coordinate / resolution to int first:
   // undefined behaviour for NaN, inf and points beyond the map's extent, answered nullptr here.
   const EvidentialOcTreeNode* nodeAt(const octomap::point3d& point_W) const;
-  // The map's answer at a point: the opinion of its voxel's own evidence, or, for a known voxel
-  // without any (free space off the surface), the answer of the voxels with evidence within a
-  // point's full kernel support (query_support.cpp); vacuous (label -1) in unknown space.
+  // The map's answer at a point: the opinion of its voxel's own evidence, or, when the map keeps
+  // its evidence on the surface (config().semantic_occupied_only) and the voxel is known without
+  // any, the answer of the voxels with evidence within a point's full kernel support
+  // (query_support.cpp); vacuous (label -1) in unknown space.
   VoxelOpinion query(const octomap::point3d& point_W) const;
   VoxelOpinion answer(const octomap::OcTreeKey& key) const;
   // The same answer as payload values (C floats into `out`); false where there is none.

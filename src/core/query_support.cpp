@@ -1,4 +1,5 @@
-// Queries off the surface (docs/design.md): a known voxel without evidence of its own is
+// Queries off the surface (docs/design.md): in a map that keeps its evidence on the surface
+// (SemanticConfig::semantic_occupied_only), a known voxel without evidence of its own is
 // answered from the voxels with evidence within a point's full kernel support around it.
 // Each neighbour's stored values (less the rule's prior) are weighted by the sparse kernel of
 // the distance from the query voxel's centre to the neighbour's cube; the answer is the
@@ -62,7 +63,10 @@ bool EvidentialOcTree::answerPayload(const octomap::OcTreeKey& key, float* out) 
   const EvidentialOcTreeNode* node = search(key);
   if (!node) return false;  // unknown space: no answer
   if (payload(node, out)) return true;
-  return supportPayload(key, out);
+  // Only a map that keeps its evidence on the surface answers free space from it: in the
+  // default map free space near surfaces holds evidence of its own, and a voxel without any
+  // (beyond every support, or cleared by clearBox) has no answer.
+  return config_.semantic_occupied_only && supportPayload(key, out);
 }
 
 VoxelOpinion EvidentialOcTree::answer(const octomap::OcTreeKey& key) const {

@@ -2,9 +2,9 @@
 // on the same queries and defined so anyone can recompute them:
 //   queries     GT-labelled points (ignore class excluded) of the evaluated scans, world frame;
 //   answer      what a row says at a query: the map's answer (EvidentialOcTree::query: the
-//               voxel's own evidence, or for a known voxel without any, the support answer
-//               of the voxels with evidence around it) or, for the input row, the point's own
-//               opinion; "no label" otherwise;
+//               voxel's own evidence, or in a map built with semantic_occupied_only, for a
+//               known voxel without any, the support answer of the voxels with evidence around
+//               it) or, for the input row, the point's own opinion; "no label" otherwise;
 //   occupancy coverage  share of queries whose voxel is occupied (OctoMap's isNodeOccupied);
 //   semantic coverage   share of queries the map answers (the paper's O.Acc);
 //   mIoU, Acc   over ALL queries (no label = wrong) and over labelled queries; mIoU averages
