@@ -412,7 +412,7 @@ int fuzzMapServices(const uint8_t* data, size_t size) {
         checkOpinion(tree, node, "query");
         const VoxelOpinion o = tree.query(p);
         // Unknown space has no answer; a voxel with evidence answers its own; a known voxel
-        // without any answers from the evidence around it (query_support.cpp).
+        // without any may answer from the evidence around it (query_support.cpp).
         const bool own = node == nullptr || node->hasSemantics();
         require(!own || o.label == tree.opinion(node).label, "query(point) disagrees with nodeAt");
         require(o.label >= -1 && o.label < tree.numClasses(), "query(point) label out of range");

@@ -5,8 +5,8 @@
 // the distance from the query voxel's centre to the neighbour's cube; the answer is the
 // kernel-weighted mean of those values, discounted by the kernel weight of the nearest one
 // (a voxel next to the surface answers almost as the surface does, one at the edge of the
-// support with little evidence). It is read out only: nothing is stored, so inserts stay
-// order-independent sums and maps stay exactly mergeable.
+// support with little evidence). It is read out only: nothing is stored, so the answer is a
+// function of the stored sums and a merged map answers from its merged evidence.
 #include <algorithm>
 #include <cmath>
 
