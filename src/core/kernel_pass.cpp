@@ -157,6 +157,13 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
   const uint64_t own_class = skip_others ? classBit(point.opinion.argmax) : 0;
   const int x0 = int(point.key[0]) - int(base[0]), y0 = int(point.key[1]) - int(base[1]),
             z0 = int(point.key[2]) - int(base[2]);
+  const int reach_x = hi[0] - lo[0] + 1;
+  const uint64_t reachable = (reach_x >= 64 ? ~uint64_t(0) : (uint64_t(1) << reach_x) - 1)
+                             << (x0 + lo[0]);
+  // The x offset of the smallest x term (the point's own column, or the subtree's edge nearest
+  // it), and the ends of the last line's interval.
+  const int nearest_x = std::clamp(0, lo[0], hi[0]);
+  int first_x = nearest_x, last_x = nearest_x;
   // x innermost: consecutive voxels of a mask word, the index and (mostly) the rows.
   for (int oz = lo[2]; oz <= hi[2]; ++oz) {
     const double sz = axis[2][oz];
@@ -165,16 +172,31 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
       const double syz = sz + axis[1][oy];
       if (syz >= 1.0) continue;
       const uint32_t line = uint32_t((z0 + oz) << kSubtreeLevels | (y0 + oy));
-      // The x offsets within the support on this line: an interval, since the x term grows
-      // away from the point (a hair wider than exact; the table gives 0 beyond s = 1).
-      int a = lo[0], b = hi[0];
-      while (a <= b && axis[0][a] + syz >= 1.0 + 1e-9) ++a;
-      while (b >= a && axis[0][b] + syz >= 1.0 + 1e-9) --b;
-      if (a > b) continue;
+      // A line without a kept voxel costs one load (most lines of a surface-only map).
+      const uint64_t kept = out->masked ? out->mask[line] & reachable : ~uint64_t(0);
+      if (!kept) continue;
+      // The x offsets within the support on this line: an interval around the smallest x term,
+      // since that term grows away from the point (a hair wider than exact; the table gives 0
+      // beyond s = 1). Its ends move little from line to line: found from the last line's.
+      const auto inside = [&](int o) { return axis[0][o] + syz < 1.0 + 1e-9; };
+      if (!inside(nearest_x)) continue;
+      int a = std::min(first_x, nearest_x), b = std::max(last_x, nearest_x);
+      if (inside(a)) {
+        while (a > lo[0] && inside(a - 1)) --a;
+      } else {
+        while (!inside(a)) ++a;
+      }
+      if (inside(b)) {
+        while (b < hi[0] && inside(b + 1)) ++b;
+      } else {
+        while (!inside(b)) --b;
+      }
+      first_x = a;
+      last_x = b;
       const int width_x = b - a + 1;
       const uint64_t interval = (width_x >= 64 ? ~uint64_t(0) : (uint64_t(1) << width_x) - 1)
                                 << (x0 + a);
-      uint64_t voxels = interval & (out->masked ? out->mask[line] : ~uint64_t(0));
+      uint64_t voxels = interval & kept;
       // Only the voxels kept and in the support: no unpredictable branch per candidate voxel.
       while (voxels) {
         const int ox = __builtin_ctzll(voxels) - x0;

@@ -110,32 +110,66 @@ void ScanSubtrees::mergeSeeds() {
   }
 }
 
-// A leaf of the map covers a cube of voxels: one x-row of the subtree is one mask word.
+constexpr int kBlockSize = 8;  // PerThread::reached: 8^3 blocks of 8^3 voxels
+constexpr int kBlocks = kSubtreeSize / kBlockSize;
+static_assert(kBlocks * kBlocks * kBlocks == 8 * 64, "PerThread::reached holds 8 words");
+
+void ScanSubtrees::markReachedBlocks(size_t i, PerThread* t) const {
+  t->reached.fill(0);
+  const octomap::OcTreeKey& base = seeds_[i].key;
+  for (size_t p = ranges_[i].first_point; p < ranges_[i].last_point; ++p) {
+    const KernelPoint& point = (*kernel_points_)[point_subtrees_[p].second];
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      const int at = int(point.key[a]) - int(base[a]);
+      lo[a] = std::max(at - point.reach, 0) / kBlockSize;
+      hi[a] = std::min(at + point.reach, kSubtreeSize - 1) / kBlockSize;
+    }
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const int block = (z * kBlocks + y) * kBlocks + x;
+          t->reached[block / 64] |= uint64_t(1) << (block % 64);
+        }
+  }
+}
+
+// A leaf of the map covers a cube of voxels: one x-row of the subtree is one mask word. Nodes
+// whose blocks no point reaches are not descended into.
 void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, int z, int size,
-                              KernelRows* rows) const {
+                              PerThread* t) const {
+  if (size == kBlockSize) {
+    const int block = ((z / kBlockSize) * kBlocks + y / kBlockSize) * kBlocks + x / kBlockSize;
+    if (!(t->reached[block / 64] >> (block % 64) & 1)) return;
+  }
   if (tree_->nodeHasChildren(node)) {
     const int half = size / 2;
     for (unsigned c = 0; c < 8; ++c) {
       if (tree_->nodeChildExists(node, c)) {
         markLeaves(tree_->getNodeChild(node, c), x + (c & 1 ? half : 0), y + (c & 2 ? half : 0),
-                   z + (c & 4 ? half : 0), half, rows);
+                   z + (c & 4 ? half : 0), half, t);
       }
     }
     return;
   }
   if (targets_ == Targets::kOccupied && !tree_->isNodeOccupied(node)) return;
   const uint64_t bits = size >= 64 ? ~uint64_t(0) : ((uint64_t(1) << size) - 1) << x;
+  std::vector<uint64_t>& mask = t->kernel.mask;
   for (int zz = z; zz < z + size; ++zz)
-    for (int yy = y; yy < y + size; ++yy) rows->mask[size_t(zz) << kSubtreeLevels | yy] |= bits;
+    for (int yy = y; yy < y + size; ++yy) mask[size_t(zz) << kSubtreeLevels | yy] |= bits;
 }
 
 void ScanSubtrees::buildMask(size_t i, const EvidentialOcTreeNode* existing,
-                             KernelRows* rows) const {
+                             PerThread* t) const {
+  KernelRows* rows = &t->kernel;
   rows->masked = targets_ == Targets::kOccupied ||
                  (targets_ == Targets::kKept && !(existing && !tree_->nodeHasChildren(existing)));
   if (!rows->masked) return;  // every voxel may get a row (or the subtree is one pruned leaf)
   std::fill(rows->mask.begin(), rows->mask.end(), 0);
-  if (existing) markLeaves(existing, 0, 0, 0, kSubtreeSize, rows);
+  if (existing) {
+    markReachedBlocks(i, t);
+    markLeaves(existing, 0, 0, 0, kSubtreeSize, t);
+  }
   const octomap::OcTreeKey& base = seeds_[i].key;
   const unsigned wanted =
       targets_ == Targets::kOccupied ? 1u << kRayOccupied : 1u << kRayFree | 1u << kRayOccupied;
@@ -155,7 +189,7 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
   // 1. The kernel rows of the subtree, in Morton order.
   const double start = threadCpuMs();
   KernelRows& kernel = t.kernel;
-  if (range.first_point < range.last_point) buildMask(i, existing, &kernel);
+  if (range.first_point < range.last_point) buildMask(i, existing, &t);
   kernel.touched.clear();
   kernel.rows.clear();
   const bool class_aware = kernel_->classAware();

@@ -4,6 +4,7 @@
 // the core.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "kernel_pass.h"
@@ -43,16 +44,20 @@ class ScanSubtrees : public SubtreeSource {
     std::vector<std::pair<uint32_t, uint32_t>> order;  // (local Morton code, row)
     std::vector<std::pair<uint32_t, uint32_t>> order_buffer;
     std::vector<VoxelUpdate> updates;
+    // The 8^3 blocks (of 8^3 voxels) of the subtree at hand that one of its points may reach.
+    std::array<uint64_t, 8> reached{};
     double kernel_cpu_ms = 0.0;
     // The most this scan's subtrees needed: rows while scattering (doubles), rows, updates.
     size_t most_row_values = 0, most_rows = 0, most_updates = 0;
   };
   void collectPointSubtrees();
   void mergeSeeds();
-  // KernelRows::mask of subtree i: the leaves of `existing` and the voxels rays update.
-  void buildMask(size_t i, const EvidentialOcTreeNode* existing, KernelRows* rows) const;
+  // KernelRows::mask of subtree i: the leaves of `existing` and the voxels rays update, within
+  // reach of its points (a map that knows the area holds many leaves no point reaches).
+  void buildMask(size_t i, const EvidentialOcTreeNode* existing, PerThread* t) const;
+  void markReachedBlocks(size_t i, PerThread* t) const;
   void markLeaves(const EvidentialOcTreeNode* node, int x, int y, int z, int size,
-                  KernelRows* rows) const;
+                  PerThread* t) const;
 
   const EvidentialOcTree* tree_ = nullptr;
   Targets targets_ = Targets::kEverywhere;
