@@ -186,7 +186,21 @@ void decodeLogOdds(const std::string& in, size_t* at, int width, const std::vect
   }
 }
 
-// The same map as format 4 wrote it, from a format-5 file whose log-odds are coded by a table.
+// The same map as format 6 wrote it (no semantic_occupied_only: the u8 before the node count),
+// from a format-7 file of a map without it.
+std::string toFormat6(const std::string& bytes, const EvidentialOcTree& tree) {
+  EXPECT_FALSE(tree.config().semantic_occupied_only) << "format 6 cannot say so";
+  const size_t s = sectionStart(bytes);
+  const size_t flag = rootOffset(bytes, tree.size()) - 8 - 1;
+  EXPECT_EQ(bytes[flag], 0);
+  std::string old = bytes.substr(0, flag) + bytes.substr(flag + 1);
+  const uint32_t six = 6;
+  std::memcpy(&old[s + kVersionOffset], &six, 4);
+  reseal(&old);
+  return old;
+}
+
+// The same map as format 4 wrote it, from a format-6 file whose log-odds are coded by a table.
 std::string toFormat4(const std::string& bytes, const EvidentialOcTree& tree) {
   const size_t s = sectionStart(bytes);
   const size_t coding = rootOffset(bytes, tree.size());
@@ -294,7 +308,7 @@ TEST(Integrity, NoAlteredFileLoadsAsADifferentMap) {
   RecordProperty("same", std::to_string(same));
 }
 
-TEST(Integrity, Format1To4FilesStillLoad) {
+TEST(Integrity, Format1To6FilesStillLoad) {
   Scratch scratch;
   for (const std::string rule : {"dempster", "ebs"}) {
     SemanticConfig config;
@@ -307,15 +321,17 @@ TEST(Integrity, Format1To4FilesStillLoad) {
       evidence.insert(evidence.end(), {float(i), 2.0f, i % 3 ? 0.0f : 0.5f});
     }
     tree->insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.5f));
-    const std::string v5 = otBytes(*tree), v4 = toFormat4(v5, *tree), v2 = toFormat2(v4, *tree);
-    ASSERT_GT(v4.size(), v5.size()) << "format 4 stores f32 log-odds";
+    const std::string v6 = toFormat6(otBytes(*tree), *tree), v4 = toFormat4(v6, *tree),
+                      v2 = toFormat2(v4, *tree);
+    ASSERT_GT(v4.size(), v6.size()) << "format 4 stores f32 log-odds";
     ASSERT_GT(v2.size(), v4.size()) << "format 2 stores inner payloads";
-    {
-      const std::string path = scratch.file("format4.ot");
-      writeBytes(path, v4);
+    for (const auto& [file, format] : {std::pair(v6, "format 6"), std::pair(v4, "format 4")}) {
+      const std::string path = scratch.file("format.ot");
+      writeBytes(path, file);
       std::unique_ptr<EvidentialOcTree> loaded;
-      ASSERT_NO_THROW(loaded = loadMap(path)) << rule;
-      EXPECT_TRUE(compareTrees(*tree, *loaded)) << rule << ", format 4";
+      ASSERT_NO_THROW(loaded = loadMap(path)) << rule << ", " << format;
+      EXPECT_TRUE(compareTrees(*tree, *loaded)) << rule << ", " << format;
+      EXPECT_FALSE(loaded->config().semantic_occupied_only) << format;
     }
     // Formats before 4 predate the evidence cap: their maps are read without one.
     config.evidence_cap = 0.0;
@@ -339,7 +355,8 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   Scratch scratch;
   const auto tree = smallMap();
   ASSERT_TRUE(tree->getRoot()->hasSemantics());
-  const std::string v5 = otBytes(*tree), v4 = toFormat4(v5, *tree), v2 = toFormat2(v4, *tree);
+  const std::string v7 = otBytes(*tree), v4 = toFormat4(toFormat6(v7, *tree), *tree),
+                    v2 = toFormat2(v4, *tree);
   const size_t root = rootOffset(v4, tree->size());
   float root_value;
   std::memcpy(&root_value, &v4[root], 4);
@@ -363,12 +380,12 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   reseal(&edited);
   refused(edited, "evidence, format 2");
   refused(toFormat1(edited), "evidence, format 1");
-  // Format 5: the root's log-odds index pointing at another value of the table.
-  const size_t coding = rootOffset(v5, tree->size());
-  ASSERT_EQ(v5[coding], 1) << "one byte per log-odds";
-  const uint32_t size = u32At(v5, coding + 1);
+  // Format 5+: the root's log-odds index pointing at another value of the table.
+  const size_t coding = rootOffset(v7, tree->size());
+  ASSERT_EQ(v7[coding], 1) << "one byte per log-odds";
+  const uint32_t size = u32At(v7, coding + 1);
   ASSERT_GE(size, 2u);
-  std::string edited5 = v5;
+  std::string edited5 = v7;
   const size_t root5 = coding + 5 + 4 * size;
   edited5[root5] = static_cast<char>((static_cast<uint8_t>(edited5[root5]) + 1) % size);
   reseal(&edited5);

@@ -86,6 +86,14 @@ struct MapSettings {
   bool kernel_creates_leaves = false;
   // Insert occupancy through OctoMap's discretized ray casting (one ray per hit voxel).
   bool discretize = true;
+  // Semantic evidence only for voxels that are occupied before the scan or hold an end point
+  // of it (a point's own voxel always gets its evidence; not exact): free space near surfaces
+  // stores no semantics and is answered at query time from the surface around it
+  // (EvidentialOcTree::query), and the support meets a surface in a disc instead of a ball,
+  // about half the insert CPU. Which voxels get evidence depends on what was occupied before a
+  // scan, so maps of one sequence in another order, or batch-mapped, differ slightly. Stored in
+  // the map (format 7+), so a loaded map answers free space as the mapping one did.
+  bool semantic_occupied_only = false;
 };
 
 struct InsertSettings {
@@ -96,14 +104,6 @@ struct InsertSettings {
   // would have crossed stay unobserved that scan (docs/benchmarks.md measures the difference).
   // An insertion setting like threads: not stored in the map.
   bool fast_free_space = false;
-  // Semantic evidence only for voxels that are occupied before the scan or hold an end point
-  // of it (a point's own voxel always gets its evidence; not exact): free space near surfaces
-  // stores no semantics and is answered at query time from the surface around it
-  // (EvidentialOcTree::query), and the support meets a surface in a disc instead of a ball,
-  // about half the insert CPU. Which voxels get evidence depends on what was occupied before a
-  // scan, so maps of one sequence in another order, or batch-mapped, differ slightly. An
-  // insertion setting: not stored in the map.
-  bool semantic_occupied_only = false;
   // Point evidence below this value counts as 0 (0: off). An evidential network's softplus or
   // exp head gives every class some evidence, nearly all of it tiny. A contribution's log-evidence is below
   // evidence_floor / C for such a class and its uncertainty u = C / S moves by at most

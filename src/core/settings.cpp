@@ -109,12 +109,12 @@ std::vector<Setting> makeList() {
         .reconfigurable(),
     Entry("discretize", &MapSettings::discretize, kMap,
           "Occupancy through OctoMap's discretized ray casting (one ray per hit voxel)"),
+    Entry("semantic_occupied_only", &MapSettings::semantic_occupied_only, kMap,
+          "Semantic evidence only for occupied voxels and this scan's end voxels; queries "
+          "elsewhere are answered from them (about half the insert CPU; not exact)"),
     // --- how an insert runs (never stored) ---
     Entry("fast_free_space", &InsertSettings::fast_free_space, kInsert,
           "Fast free space for live use: rays stop in space this scan already cleared (not exact)"),
-    Entry("semantic_occupied_only", &InsertSettings::semantic_occupied_only, kInsert,
-          "Semantic evidence only for occupied voxels and this scan's end voxels; queries "
-          "elsewhere are answered from them (about half the insert CPU; not exact)"),
     Entry("evidence_floor", &InsertSettings::evidence_floor, kInsert,
           "Point evidence below this counts as 0 (0: off; 0.01 makes learned evidence about as "
           "cheap as one-hot)")
