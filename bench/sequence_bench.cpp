@@ -86,6 +86,15 @@ std::unique_ptr<evbench::Method> occupiedOnlyMethod(double range) {
   return m;
 }
 
+// The live launch's settings with semantic evidence only in occupied voxels.
+std::unique_ptr<evbench::Method> liveSurfaceMethod(double range) {
+  auto m = evbench::liveMethod(range, false);
+  m->key = "live_surface";
+  m->label += ", semantic_occupied_only";
+  static_cast<evbench::SemanticMethod&>(*m).config.semantic_occupied_only = true;
+  return m;
+}
+
 // The exact insert in a map that keeps only the region around the sensor in memory.
 struct LocalMethod : evbench::SemanticMethod {
   std::string tile_dir;
@@ -142,10 +151,12 @@ std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
       out.push_back(evbench::liveMethod(o.range, false));
     else if (key == "occupied_only")
       out.push_back(occupiedOnlyMethod(o.range));
+    else if (key == "live_surface")
+      out.push_back(liveSurfaceMethod(o.range));
     else if (key == "local")
       out.push_back(localMethod(o));
     else
-      throw std::invalid_argument("methods are plain, exact, live, occupied_only, local: " + key);
+      throw std::invalid_argument("methods are plain, exact, live, occupied_only, live_surface, local: " + key);
   }
   return out;
 }
