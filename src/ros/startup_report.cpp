@@ -27,6 +27,8 @@ std::string settingsReport(const std::string& profile, const SemanticConfig& in_
   describe(values, "ds_multiplier", in_use.ds_multiplier, offline.ds_multiplier);
   describe(values, "evidence_floor", in_use.evidence_floor, offline.evidence_floor);
   describe(values, "fast_free_space", in_use.fast_free_space, offline.fast_free_space);
+  describe(values, "semantic_occupied_only", in_use.semantic_occupied_only,
+           offline.semantic_occupied_only);
 
   std::ostringstream s;
   *warn = profile.empty() && live_topic;

@@ -15,12 +15,14 @@ TEST(StartupReport, NamesTheProfileAndTheChangedSettings) {
   SemanticConfig live;
   live.length_scale = 0.2;
   live.fast_free_space = true;
+  live.semantic_occupied_only = true;
   bool warn = true;
   const std::string report = settingsReport("live", live, true, &warn);
   EXPECT_FALSE(warn);
   EXPECT_TRUE(contains(report, "settings profile: live")) << report;
   EXPECT_TRUE(contains(report, "length_scale 0.2 (offline 0.3)")) << report;
   EXPECT_TRUE(contains(report, "fast_free_space true (offline false)")) << report;
+  EXPECT_TRUE(contains(report, "semantic_occupied_only true (offline false)")) << report;
   EXPECT_TRUE(contains(report, "ds_multiplier 5,")) << report;  // unchanged: no "(offline"
 }
 
