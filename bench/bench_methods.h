@@ -147,19 +147,20 @@ inline std::unique_ptr<Method> semanticMethod(double range, int threads, bool fa
   return m;
 }
 
-// The live launch's settings (launch/mapping.launch): fast free space, kernel length 0.2 m,
-// count cap ds_multiplier 2, evidence floor 0.01.
+// The live launch's settings (config/mapping_live.yaml): fast free space, kernel length 0.2 m,
+// count cap ds_multiplier 2, evidence floor 0.01, semantic evidence on the surface only.
 inline std::unique_ptr<Method> liveMethod(double range, bool learned) {
   auto m = semanticMethod(range, 2, true, "dempster", learned);
   m->label = std::string(
                  "live launch settings (fast free space, length_scale 0.2, ds_multiplier 2, "
-                 "evidence_floor 0.01)") +
+                 "evidence_floor 0.01, semantic_occupied_only)") +
              (learned ? ", learned (cross-fitted) evidence" : "");
   m->key = std::string("live") + (learned ? "_learned" : "");
   SemanticConfig& config = static_cast<SemanticMethod&>(*m).config;
   config.length_scale = 0.2;
   config.ds_multiplier = 2.0;
   config.evidence_floor = 0.01;
+  config.semantic_occupied_only = true;
   return m;
 }
 

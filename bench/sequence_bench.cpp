@@ -86,12 +86,13 @@ std::unique_ptr<evbench::Method> occupiedOnlyMethod(double range) {
   return m;
 }
 
-// The live launch's settings with semantic evidence only in occupied voxels.
-std::unique_ptr<evbench::Method> liveSurfaceMethod(double range) {
+// The live launch's settings with semantic evidence in free space too (what the launch set
+// before it kept evidence on the surface).
+std::unique_ptr<evbench::Method> liveVolumeMethod(double range) {
   auto m = evbench::liveMethod(range, false);
-  m->key = "live_surface";
-  m->label += ", semantic_occupied_only";
-  static_cast<evbench::SemanticMethod&>(*m).config.semantic_occupied_only = true;
+  m->key = "live_volume";
+  m->label = "live launch settings without semantic_occupied_only";
+  static_cast<evbench::SemanticMethod&>(*m).config.semantic_occupied_only = false;
   return m;
 }
 
@@ -151,12 +152,12 @@ std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
       out.push_back(evbench::liveMethod(o.range, false));
     else if (key == "occupied_only")
       out.push_back(occupiedOnlyMethod(o.range));
-    else if (key == "live_surface")
-      out.push_back(liveSurfaceMethod(o.range));
+    else if (key == "live_volume")
+      out.push_back(liveVolumeMethod(o.range));
     else if (key == "local")
       out.push_back(localMethod(o));
     else
-      throw std::invalid_argument("methods are plain, exact, live, occupied_only, live_surface, local: " + key);
+      throw std::invalid_argument("methods are plain, exact, live, occupied_only, live_volume, local: " + key);
   }
   return out;
 }

@@ -15,7 +15,8 @@ from collections import defaultdict
 METHODS = [("plain", "plain OcTree::insertPointCloud"),
            ("exact", "semantic insert, exact (library defaults)"),
            ("live", "live launch settings (fast free space, length_scale 0.2, ds_multiplier 2, "
-                    "evidence_floor 0.01)"),
+                    "evidence_floor 0.01, semantic_occupied_only)"),
+           ("live_volume", "live launch settings without semantic_occupied_only"),
            ("occupied_only", "semantic insert, exact, semantic_occupied_only (evidence in occupied "
                              "voxels only: a different map)")]
 STEADY = (10, 30)  # steps 10-29 of the revisit: the map already knows the area
