@@ -362,13 +362,13 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
     status_.local_map_tiles_written = local_map_ ? local_map_->tilesWritten() : 0;
     status_.local_map_tiles_read = local_map_ ? local_map_->tilesRead() : 0;
   }
-  recordMapSize();
+  recordMapSizeAfterInsert();
   ROS_INFO(
       "scan %zu: %zu points (%s), %zu semantic, %zu voxels updated, insert %.0f ms "
-      "(occupancy %.0f, kernel %.0f, update %.0f); map %zu leaves, %zu semantic; %zu waiting",
+      "(occupancy %.0f, kernel %.0f, update %.0f); map %zu semantic leaves; %zu waiting",
       scans, stats.points_in, scan.source.c_str(), stats.semantic_points, stats.voxels_updated, ms,
-      stats.ms_occupancy, stats.ms_kernel, stats.ms_update, tree_->getNumLeafNodes(),
-      tree_->numSemanticNodes(), clouds_->size());
+      stats.ms_occupancy, stats.ms_kernel, stats.ms_update, tree_->numSemanticNodes(),
+      clouds_->size());
   outputs_->markStale();
   if (config_.publish_rate <= 0.0) publishMap(false);
 }
@@ -464,7 +464,12 @@ void MappingServer::publishMap(bool force) {
            msSince(t0), mean_ms, static_cast<unsigned long long>(scans));
 }
 
+void MappingServer::recordMapSizeAfterInsert() {
+  if (clouds_->size() == 0 || msSince(map_size_recorded_) >= 1000.0) recordMapSize();
+}
+
 void MappingServer::recordMapSize() {
+  map_size_recorded_ = std::chrono::steady_clock::now();
   std::lock_guard<std::mutex> lock(status_mutex_);
   status_.map_leaves = tree_->getNumLeafNodes();
   status_.map_semantic_leaves = tree_->numSemanticNodes();

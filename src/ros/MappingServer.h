@@ -25,6 +25,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <boost/thread/recursive_mutex.hpp>
 #include <deque>
@@ -111,8 +112,11 @@ class MappingServer {
   void adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupancy_only);
   // A service's path: relative paths are taken from the node's working directory.
   static std::string absolutePath(const std::string& path);
-  // Map size into status_ (map mutex held).
+  // Map size into status_ (map mutex held). Counting leaves walks the whole map (tens of ms in a
+  // large one), so after an insert it is recorded when no cloud waits, else once a second.
   void recordMapSize();
+  void recordMapSizeAfterInsert();
+  std::chrono::steady_clock::time_point map_size_recorded_{};
   // Autosave (~autosave_period): the thread, one autosave, and the resume at start-up.
   void autosaveLoop();
   double autosaveOnce();  // the map lock's hold [ms]
