@@ -135,9 +135,11 @@ void ScanSubtrees::markReachedBlocks(size_t i, PerThread* t) const {
 }
 
 // A leaf of the map covers a cube of voxels: one x-row of the subtree is one mask word. Nodes
-// whose blocks no point reaches are not descended into.
+// whose blocks no point reaches are not descended into, nor (kOccupied) nodes without an
+// occupied leaf: an inner node's log-odds are its children's maximum.
 void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, int z, int size,
                               PerThread* t) const {
+  if (targets_ == Targets::kOccupied && !tree_->isNodeOccupied(node)) return;
   if (size == kBlockSize) {
     const int block = ((z / kBlockSize) * kBlocks + y / kBlockSize) * kBlocks + x / kBlockSize;
     if (!(t->reached[block / 64] >> (block % 64) & 1)) return;
@@ -152,7 +154,6 @@ void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, in
     }
     return;
   }
-  if (targets_ == Targets::kOccupied && !tree_->isNodeOccupied(node)) return;
   const uint64_t bits = size >= 64 ? ~uint64_t(0) : ((uint64_t(1) << size) - 1) << x;
   std::vector<uint64_t>& mask = t->kernel.mask;
   for (int zz = z; zz < z + size; ++zz)
