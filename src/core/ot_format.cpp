@@ -7,8 +7,9 @@
 //   5 x f32 occupancy log-odds (clamp min, clamp max, hit, miss, threshold), f64 evidence_cap
 //   (4+; older maps are read without a cap, as they were written), f64 + u64 the adaptive
 //   cap's statistic (sum and count, 6+; evidence_cap -1 = adaptive), u8 semantic_occupied_only
-//   (7+; older maps kept evidence in free space too), u64 node count, log-odds coding (5+), nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of every
-//   byte from the magic to the end magic.
+//   (7+; older maps kept evidence in free space too), u64 node count, log-odds coding (5+),
+//   nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of every byte from the magic to
+//   the end magic.
 //   log-odds coding (5+): u8 width W (1, 2 or 4); for W < 4 u32 T (<= 256 for W = 1,
 //             <= 65536 for W = 2) and T x f32: the map's distinct log-odds, increasing (-0 before
 //             +0), and a node's log-odds is then its W-byte index in this table (log_odds_table.h)
