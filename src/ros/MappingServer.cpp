@@ -313,6 +313,7 @@ CloudReadOptions MappingServer::cloudReadOptions() const {
 void MappingServer::insertCloud(const PendingCloud& pending) {
   const sensor_msgs::PointCloud2& cloud = *pending.cloud;
   std::lock_guard<std::mutex> lock(mutex_);
+  const auto t_read = std::chrono::steady_clock::now();
   SemanticCloud scan;
   std::string error = fromPointCloud2(cloud, read_options_, &scan);
   if (error.empty() && config_.use_camera) error = paintFromCamera(cloud, &scan);
@@ -331,6 +332,7 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
                 "; map unchanged");
     return;
   }
+  const double read_ms = msSince(t_read);
   const auto t0 = std::chrono::steady_clock::now();
   InsertStats stats;
   try {
@@ -364,9 +366,10 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
   }
   recordMapSizeAfterInsert();
   ROS_INFO(
-      "scan %zu: %zu points (%s), %zu semantic, %zu voxels updated, insert %.0f ms "
-      "(occupancy %.0f, kernel %.0f, update %.0f); map %zu semantic leaves; %zu waiting",
-      scans, stats.points_in, scan.source.c_str(), stats.semantic_points, stats.voxels_updated, ms,
+      "scan %zu: %zu points (%s, read in %.0f ms), %zu semantic, %zu voxels updated, insert "
+      "%.0f ms (occupancy %.0f, kernel %.0f, update %.0f); map %zu semantic leaves; %zu waiting",
+      scans, stats.points_in, scan.source.c_str(), read_ms, stats.semantic_points,
+      stats.voxels_updated, ms,
       stats.ms_occupancy, stats.ms_kernel, stats.ms_update, tree_->numSemanticNodes(),
       clouds_->size());
   outputs_->markStale();

@@ -336,6 +336,50 @@ std::string readPointEvidence(const uint8_t* p, const SemanticFields& f, int C, 
   }
 }
 
+// The common layout (x, y, z and a C-float `evidence` block, float32, host byte order) read with
+// plain copies: the general per-value reader costs ~30 ms for 120k points and 20 classes.
+// Returns false, with `out` unspecified, when the layout is another or a value is not valid;
+// the general reader then reads the cloud again and says what is wrong.
+std::string noFinitePoints(size_t nonfinite) {
+  return "cloud has no finite points (" + std::to_string(nonfinite) + " NaN/inf)";
+}
+
+bool readPackedFloatCloud(const sensor_msgs::PointCloud2& msg, const FieldRef xyz[3],
+                          const SemanticFields& fields, int C, SemanticCloud* out) {
+  if (msg.is_bigendian || fields.input != EvidenceInput::kEvidence) return false;
+  for (int a = 0; a < 3; ++a)
+    if (xyz[a].datatype != PointField::FLOAT32) return false;
+  for (int c = 0; c < C; ++c)
+    if (fields.channels[c].datatype != PointField::FLOAT32 ||
+        fields.channels[c].offset != fields.channels[0].offset + 4 * uint32_t(c))
+      return false;
+  const size_t n_points = size_t(msg.width) * msg.height;
+  out->evidence.resize(n_points * C);
+  float* evidence = out->evidence.data();
+  size_t kept = 0;
+  bool valid = true;  // every value finite, >= 0: NaN fails both comparisons
+  for (uint32_t v = 0; v < msg.height; ++v) {
+    const uint8_t* row_ptr = msg.data.data() + size_t(v) * msg.row_step;
+    for (uint32_t u = 0; u < msg.width; ++u) {
+      const uint8_t* p = row_ptr + size_t(u) * msg.point_step;
+      float q[3];
+      for (int a = 0; a < 3; ++a) std::memcpy(&q[a], p + xyz[a].offset, 4);
+      if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) {
+        ++out->nonfinite_points;
+        continue;
+      }
+      float* row = evidence + kept * C;
+      std::memcpy(row, p + fields.channels[0].offset, 4 * size_t(C));
+      for (int c = 0; c < C; ++c)
+        valid &= row[c] >= 0.0f && row[c] <= std::numeric_limits<float>::max();
+      out->points_S.push_back(q[0], q[1], q[2]);
+      ++kept;
+    }
+  }
+  out->evidence.resize(kept * C);
+  return valid;
+}
+
 }  // namespace
 
 EvidenceInput evidenceInputFromName(const std::string& name) {
@@ -368,9 +412,14 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
   if (!err.empty()) return err;
   out->source = sourceName(fields.input, C, options);
 
-  const bool swap = msg.is_bigendian != 0;  // this code assumes a little-endian host
   const size_t n_points = size_t(msg.width) * msg.height;
   out->points_S.reserve(n_points);
+  if (readPackedFloatCloud(msg, xyz, fields, C, out))
+    return out->points_S.size() > 0 ? "" : noFinitePoints(out->nonfinite_points);
+  out->points_S.clear();
+  out->evidence.clear();
+  out->nonfinite_points = 0;
+  const bool swap = msg.is_bigendian != 0;  // this code assumes a little-endian host
   out->evidence.reserve(n_points * C);
   std::vector<float> row(C), scratch(C);
   for (uint32_t v = 0; v < msg.height; ++v) {
@@ -392,9 +441,7 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
       out->evidence.insert(out->evidence.end(), row.begin(), row.end());
     }
   }
-  if (out->points_S.size() == 0)
-    return "cloud has no finite points (" + std::to_string(out->nonfinite_points) + " NaN/inf)";
-  return "";
+  return out->points_S.size() > 0 ? "" : noFinitePoints(out->nonfinite_points);
 }
 
 namespace {

@@ -433,6 +433,33 @@ TEST(FromPointCloud2, BigEndianCloudsAreSwapped) {
   EXPECT_FLOAT_EQ(out.evidence[1 * kC + 1], 5.f);
 }
 
+// The common layout (float32 x, y, z and evidence, host order) has a reader of its own; the
+// same points big-endian go through the general one. Both must give the same cloud.
+TEST(FromPointCloud2, PackedAndGeneralReadersGiveTheSameCloud) {
+  const size_t n = 300;
+  auto packed = evidenceCloud(n, 4);
+  uint32_t state = 12345;
+  auto next = [&] { return (state = state * 1664525u + 1013904223u) >> 8; };
+  for (size_t i = 0; i < n; ++i) {
+    for (int c = 0; c < kC; ++c) put<float>(&packed, i, "evidence", c, float(next() % 1000) / 7.f);
+    if (next() % 10 == 0)
+      put<float>(&packed, i, "z", 0, std::numeric_limits<float>::infinity());
+  }
+  sensor_msgs::PointCloud2 swapped = packed;
+  for (size_t i = 0; i + 4 <= swapped.data.size(); i += 4)
+    std::swap(swapped.data[i], swapped.data[i + 3]), std::swap(swapped.data[i + 1], swapped.data[i + 2]);
+  swapped.is_bigendian = true;
+  SemanticCloud a, b;
+  ASSERT_EQ(fromPointCloud2(packed, options(), &a), "");
+  ASSERT_EQ(fromPointCloud2(swapped, options(), &b), "");
+  ASSERT_GT(a.nonfinite_points, 0u);
+  EXPECT_EQ(a.nonfinite_points, b.nonfinite_points);
+  ASSERT_EQ(a.points_S.size(), b.points_S.size());
+  for (size_t i = 0; i < a.points_S.size(); ++i)
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(a.points_S[i](k), b.points_S[i](k));
+  EXPECT_EQ(a.evidence, b.evidence);
+}
+
 TEST(EvidenceInputName, UnknownNameThrows) {
   EXPECT_EQ(evidenceInputFromName("alpha"), EvidenceInput::kAlpha);
   EXPECT_EQ(evidenceInputFromName("logits"), EvidenceInput::kLogits);
