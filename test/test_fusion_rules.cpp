@@ -141,6 +141,22 @@ TEST(DempsterRule, EvidenceSpaceAgreesWithBeliefSpaceInBothOrders) {
   }
 }
 
+// The projection the Brier score, the ECE and the error probability use, by hand.
+TEST(FusionRules, ErrorProbabilityIsOneMinusTheLargestProjectedProbability) {
+  VoxelOpinion o;
+  o.label = 0;
+  o.belief = {0.5f, 0.2f, 0.1f};
+  o.uncertainty = 0.2f;  // dempster: p = b + u / 3
+  const auto dempster = FusionRule::create(FusionRuleType::kDempster);
+  const std::vector<float> p = dempster->probabilities(o);
+  ASSERT_EQ(p.size(), 3u);
+  EXPECT_NEAR(p[1], 0.2 + 0.2 / 3, 1e-6);
+  EXPECT_NEAR(dempster->errorProbability(o), 1.0 - (0.5 + 0.2 / 3), 1e-6);
+  const auto sbki = FusionRule::create(FusionRuleType::kSbki);  // belief: alpha / S itself
+  EXPECT_NEAR(sbki->errorProbability(o), 0.5, 1e-6);
+  EXPECT_EQ(dempster->errorProbability(VoxelOpinion()), 1.0f);  // no belief: nothing known
+}
+
 TEST(DempsterRule, ContributionMatchesHandComputation) {
   const auto rule = FusionRule::create("dempster");
   EXPECT_EQ(rule->prior(), 0.0f);  // L = 0: the vacuous opinion

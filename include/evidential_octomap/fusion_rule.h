@@ -64,6 +64,12 @@ class FusionRule {
   virtual void add(float* payload, const double* increments, int num_classes) const;
   // Interprets a payload of C floats.
   virtual VoxelOpinion readout(const float* payload, int num_classes) const = 0;
+  // The class probabilities an opinion projects to (C = its belief's size): dempster b^c + u/C,
+  // sbki/ebs the expected probabilities it holds. The Brier score and ECE are of these.
+  std::vector<float> probabilities(const VoxelOpinion& opinion) const;
+  // 1 - max_c p_c: the map's own probability that the voxel's label is wrong, the uncertainty
+  // that detects wrong labels best across datasets (docs/results.md); 1 when it has no belief.
+  float errorProbability(const VoxelOpinion& opinion) const;
 
   // The rule of a map's settings (rule, sbki_prior, evidence_cap).
   static std::unique_ptr<FusionRule> create(const SemanticConfig& config);

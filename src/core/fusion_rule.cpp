@@ -154,6 +154,20 @@ FusionRuleType fusionRuleFromName(const std::string& name) {
   throw std::invalid_argument("unknown fusion rule '" + name + "' (valid: " + valid + ")");
 }
 
+std::vector<float> FusionRule::probabilities(const VoxelOpinion& opinion) const {
+  if (!uncertaintyIsMass()) return opinion.belief;  // alpha / S
+  const float share = opinion.uncertainty / float(opinion.belief.size());
+  std::vector<float> p(opinion.belief);
+  for (float& value : p) value += share;
+  return p;
+}
+
+float FusionRule::errorProbability(const VoxelOpinion& opinion) const {
+  if (opinion.belief.empty()) return 1.0f;
+  const std::vector<float> p = probabilities(opinion);
+  return 1.0f - *std::max_element(p.begin(), p.end());
+}
+
 void FusionRule::add(float* payload, const double* increments, int num_classes) const {
   for (int c = 0; c < num_classes; ++c) {
     payload[c] = static_cast<float>(

@@ -31,19 +31,10 @@ Answer answerOf(const VoxelOpinion& o, const FusionRule& rule) {
   Answer a;
   a.label = o.label;
   if (o.label < 0) return a;
-  const int num_classes = static_cast<int>(o.belief.size());
-  a.probability.resize(num_classes);
+  a.probability = rule.probabilities(o);
   // Dissonance of the subjective-logic belief masses; the Dirichlet rules have none apart from
   // their expected probabilities, read as a dogmatic opinion.
-  std::vector<float> masses = o.belief;
-  if (rule.uncertaintyIsMass()) {
-    for (int c = 0; c < num_classes; ++c)
-      a.probability[c] = o.belief[c] + o.uncertainty / num_classes;
-  } else {
-    a.probability = o.belief;  // alpha / S
-  }
-  const float max_p = *std::max_element(a.probability.begin(), a.probability.end());
-  a.uncertainty = {o.uncertainty, o.conflict, 1.0f - max_p, float(dissonance(masses))};
+  a.uncertainty = {o.uncertainty, o.conflict, rule.errorProbability(o), float(dissonance(o.belief))};
   return a;
 }
 

@@ -461,6 +461,7 @@ std::vector<VoxelView> collectLeaves(const EvidentialOcTree& tree, const Box& bo
       const VoxelOpinion o = tree.opinion(&node);
       v.label = o.label;
       v.uncertainty = o.uncertainty;
+      v.error_probability = tree.rule().errorProbability(o);
       v.conflict = o.conflict;
     }
     voxels.push_back(v);

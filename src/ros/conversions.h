@@ -67,8 +67,9 @@ struct VoxelView {
   double size = 0.0;   // edge length [m]
   unsigned depth = 0;  // tree depth of the leaf
   int label = -1;      // argmax class, -1: no semantic evidence
-  float uncertainty = 1.0f;
-  float conflict = 0.0f;  // VoxelOpinion::conflict
+  float uncertainty = 1.0f;        // VoxelOpinion::uncertainty (dempster: vacuity u)
+  float error_probability = 1.0f;  // FusionRule::errorProbability: P(label wrong)
+  float conflict = 0.0f;           // VoxelOpinion::conflict
 };
 
 // Axis-aligned box in the map frame; empty (min > max) means "everything".

@@ -35,8 +35,9 @@ void stampAndSend(StaleOutput* output, Message message, const ros::Time& time) {
   output->send(message);
 }
 
-std::string uncertaintyName(const EvidentialOcTree& tree) {
-  return tree.rule().uncertaintyIsMass() ? "uncertainty u" : "uncertainty (Dirichlet var.)";
+std::string uncertaintyName(const EvidentialOcTree& tree, UncertaintyView view) {
+  if (view == UncertaintyView::kErrorProbability) return "P(label wrong) = 1 - max p";
+  return tree.rule().uncertaintyIsMass() ? "vacuity u" : "uncertainty (Dirichlet var.)";
 }
 
 }  // namespace
@@ -81,7 +82,8 @@ std::string MapOutputs::publish(const EvidentialOcTree& tree, const ClassTable& 
                                 const octomap::point3d& origin_W, bool force) {
   // Until the uncertainty view is built, the legend shows the configured range, not yet fitted.
   if (!legend_sent_)
-    publishLegend(classes, resolveRange({}, config_.uncertainty_range), uncertaintyName(tree));
+    publishLegend(classes, resolveRange({}, config_.uncertainty_range, config_.uncertainty_view),
+                  uncertaintyName(tree, config_.uncertainty_view));
   std::string sent = publishViews(tree, classes, origin_W, force);
   if (!wholeMapsDue(force)) return sent;  // still stale: sent once the period has passed
   const auto t0 = std::chrono::steady_clock::now();
@@ -124,9 +126,11 @@ std::string MapOutputs::publishViews(const EvidentialOcTree& tree, const ClassTa
     if (semantic_markers_.wanted(force))
       stampAndSend(&semantic_markers_, semanticMarkers(voxels, classes, frame, depth), now);
     if (uncertainty_markers_.wanted(force)) {
-      const UncertaintyRange range = resolveRange(voxels, config_.uncertainty_range);
-      stampAndSend(&uncertainty_markers_, uncertaintyMarkers(voxels, range, frame, depth), now);
-      publishLegend(classes, range, uncertaintyName(tree));
+      const UncertaintyView view = config_.uncertainty_view;
+      const UncertaintyRange range = resolveRange(voxels, config_.uncertainty_range, view);
+      stampAndSend(&uncertainty_markers_, uncertaintyMarkers(voxels, range, view, frame, depth),
+                   now);
+      publishLegend(classes, range, uncertaintyName(tree, view));
     }
     if (conflict_markers_.wanted(force))
       stampAndSend(&conflict_markers_, conflictMarkers(voxels, frame, depth), now);

@@ -50,6 +50,9 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("publish_rate", c.publish_rate, c.publish_rate);
   nh.param("publish_radius", c.publish_radius, c.publish_radius);
   nh.param("full_map_period", c.full_map_period, c.full_map_period);
+  std::string view = "error_probability";
+  nh.param("uncertainty_view", view, view);
+  c.uncertainty_view = uncertaintyViewFromName(view);  // throws with the valid names
   nh.param("uncertainty_range/automatic", c.uncertainty_range.automatic,
            c.uncertainty_range.automatic);
   nh.param("uncertainty_range/min", c.uncertainty_range.min, c.uncertainty_range.min);

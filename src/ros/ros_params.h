@@ -35,6 +35,7 @@ struct NodeConfig {
   // whose cost grows with the map, are rebuilt at most once per this period [s]; the views
   // follow publish_rate. A forced publish (reset, clear_bbx) sends them at once.
   double full_map_period = 0.0;
+  UncertaintyView uncertainty_view = UncertaintyView::kErrorProbability;  // what it colours
   UncertaintyRange uncertainty_range;  // uncertainty colour range (fixed 0..1 or automatic)
   int queue_size = 5;                // tf2 MessageFilter queue (clouds waiting for their TF)
   int insert_queue_size = 1;         // clouds waiting for the insertion thread; when full, the

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "evidential_octomap/io.h"
 
@@ -63,13 +64,25 @@ visualization_msgs::MarkerArray semanticMarkers(const std::vector<VoxelView>& vo
   });
 }
 
-UncertaintyRange resolveRange(const std::vector<VoxelView>& voxels, const UncertaintyRange& range) {
+UncertaintyView uncertaintyViewFromName(const std::string& name) {
+  if (name == "error_probability") return UncertaintyView::kErrorProbability;
+  if (name == "vacuity") return UncertaintyView::kVacuity;
+  throw std::invalid_argument("~uncertainty_view must be 'error_probability' or 'vacuity', not '" +
+                              name + "'");
+}
+
+float shownUncertainty(const VoxelView& voxel, UncertaintyView view) {
+  return view == UncertaintyView::kVacuity ? voxel.uncertainty : voxel.error_probability;
+}
+
+UncertaintyRange resolveRange(const std::vector<VoxelView>& voxels, const UncertaintyRange& range,
+                              UncertaintyView view) {
   if (!range.automatic || voxels.empty()) return {false, range.min, range.max};
-  // Fitted to the map's u distribution: its 5th to 95th percentile spans the colour map (most
-  // voxels sit near the read-out floor; min..max would give them all one colour).
+  // Fitted to the map's distribution of the value: its 5th to 95th percentile spans the colour
+  // map (most voxels sit near the read-out floor; min..max would give them all one colour).
   std::vector<float> u;
   u.reserve(voxels.size());
-  for (const VoxelView& v : voxels) u.push_back(v.uncertainty);
+  for (const VoxelView& v : voxels) u.push_back(shownUncertainty(v, view));
   auto percentile = [&](double q) {
     auto nth = u.begin() + std::lround(q * double(u.size() - 1));
     std::nth_element(u.begin(), nth, u.end());
@@ -95,11 +108,12 @@ visualization_msgs::MarkerArray rampMarkers(const std::vector<VoxelView>& voxels
 
 visualization_msgs::MarkerArray uncertaintyMarkers(const std::vector<VoxelView>& voxels,
                                                    const UncertaintyRange& range,
+                                                   UncertaintyView view,
                                                    const std::string& frame_id,
                                                    unsigned tree_depth) {
-  const UncertaintyRange r = resolveRange(voxels, range);
+  const UncertaintyRange r = resolveRange(voxels, range, view);
   return rampMarkers(voxels, "uncertainty", r.min, r.max, frame_id, tree_depth,
-                     [](const VoxelView& v) { return v.uncertainty; });
+                     [view](const VoxelView& v) { return shownUncertainty(v, view); });
 }
 
 visualization_msgs::MarkerArray conflictMarkers(const std::vector<VoxelView>& voxels,

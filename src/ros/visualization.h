@@ -14,8 +14,16 @@
 
 namespace evidential_octomap {
 
+// What the uncertainty view colours (~uncertainty_view): the map's probability that a voxel's
+// label is wrong (1 - max_c p_c, the default: it detects wrong labels best, docs/results.md), or
+// the vacuity u (how little evidence the voxel holds; sbki/ebs: the Dirichlet variance).
+enum class UncertaintyView { kErrorProbability, kVacuity };
+// "error_probability" or "vacuity"; throws std::invalid_argument naming both otherwise.
+UncertaintyView uncertaintyViewFromName(const std::string& name);
+float shownUncertainty(const VoxelView& voxel, UncertaintyView view);
+
 // Colour range of the uncertainty view: fixed [min, max], or automatic: fitted to the shown
-// voxels' u, their 5th to 95th percentile.
+// voxels' values, their 5th to 95th percentile.
 struct UncertaintyRange {
   bool automatic = false;
   double min = 0.0;
@@ -26,12 +34,14 @@ visualization_msgs::MarkerArray semanticMarkers(const std::vector<VoxelView>& vo
                                                 const ClassTable& classes,
                                                 const std::string& frame_id, unsigned tree_depth);
 
-// The range actually drawn: `range` itself, or the voxels' 5th..95th percentile of u when
-// automatic (then `automatic` stays true, for the legend).
-UncertaintyRange resolveRange(const std::vector<VoxelView>& voxels, const UncertaintyRange& range);
+// The range actually drawn: `range` itself, or the voxels' 5th..95th percentile of the shown
+// value when automatic (then `automatic` stays true, for the legend).
+UncertaintyRange resolveRange(const std::vector<VoxelView>& voxels, const UncertaintyRange& range,
+                              UncertaintyView view);
 
 visualization_msgs::MarkerArray uncertaintyMarkers(const std::vector<VoxelView>& voxels,
                                                    const UncertaintyRange& range,
+                                                   UncertaintyView view,
                                                    const std::string& frame_id,
                                                    unsigned tree_depth);
 

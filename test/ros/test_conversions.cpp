@@ -1,4 +1,5 @@
 // PointCloud2 <-> core conversions, without a roscore (grid_map_ros style).
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -613,7 +614,7 @@ TEST(UncertaintyMarkers, ColoursFollowTheUncertaintyColourMap) {
   voxels[0].uncertainty = 0.f;
   voxels[1].uncertainty = 1.f;
   UncertaintyRange fixed;
-  const auto array = uncertaintyMarkers(voxels, fixed, "map", 16);
+  const auto array = uncertaintyMarkers(voxels, fixed, UncertaintyView::kVacuity, "map", 16);
   const auto lo = uncertaintyColor(0.0), hi = uncertaintyColor(1.0);
   EXPECT_FLOAT_EQ(array.markers[16].colors[0].r, lo[0] / 255.f);
   EXPECT_FLOAT_EQ(array.markers[16].colors[1].r, hi[0] / 255.f);
@@ -623,9 +624,43 @@ TEST(UncertaintyMarkers, ColoursFollowTheUncertaintyColourMap) {
   voxels[1].uncertainty = 0.4f;
   UncertaintyRange automatic;
   automatic.automatic = true;
-  const auto scaled = uncertaintyMarkers(voxels, automatic, "map", 16);
+  const auto scaled = uncertaintyMarkers(voxels, automatic, UncertaintyView::kVacuity, "map", 16);
   EXPECT_FLOAT_EQ(scaled.markers[16].colors[1].r, hi[0] / 255.f);
   EXPECT_FLOAT_EQ(scaled.markers[16].colors[0].g, lo[1] / 255.f);
+}
+
+TEST(UncertaintyMarkers, TheViewChoosesErrorProbabilityOrVacuity) {
+  std::vector<VoxelView> voxels(2);
+  voxels[0].depth = voxels[1].depth = 16;
+  voxels[0].uncertainty = voxels[1].uncertainty = 0.5f;  // the same vacuity
+  voxels[0].error_probability = 0.f;
+  voxels[1].error_probability = 1.f;
+  const auto lo = uncertaintyColor(0.0), hi = uncertaintyColor(1.0), mid = uncertaintyColor(0.5);
+  const auto errors = uncertaintyMarkers(voxels, UncertaintyRange(),
+                                         uncertaintyViewFromName("error_probability"), "map", 16);
+  EXPECT_FLOAT_EQ(errors.markers[16].colors[0].g, lo[1] / 255.f);
+  EXPECT_FLOAT_EQ(errors.markers[16].colors[1].r, hi[0] / 255.f);
+  const auto vacuity = uncertaintyMarkers(voxels, UncertaintyRange(),
+                                          uncertaintyViewFromName("vacuity"), "map", 16);
+  EXPECT_FLOAT_EQ(vacuity.markers[16].colors[0].r, mid[0] / 255.f);
+  EXPECT_FLOAT_EQ(vacuity.markers[16].colors[1].r, mid[0] / 255.f);
+  EXPECT_THROW(uncertaintyViewFromName("u"), std::invalid_argument);
+}
+
+// Each occupied voxel's error probability is 1 - max_c (b^c + u / C) of its own opinion.
+TEST(LeafViews, ErrorProbabilityIsOneMinusTheLargestProjectedProbability) {
+  auto tree = wallMap();
+  size_t labelled = 0;
+  for (const auto& v : occupiedVoxels(*tree)) {
+    if (v.label < 0) continue;
+    ++labelled;
+    const VoxelOpinion o = tree->opinion(tree->search(v.center, v.depth));
+    double best = 0.0;
+    for (float b : o.belief) best = std::max(best, double(b) + double(o.uncertainty) / kC);
+    EXPECT_NEAR(v.error_probability, 1.0 - best, 1e-6);
+    EXPECT_LT(v.error_probability, 1.0 - 1.0 / kC + 1e-6);
+  }
+  EXPECT_GT(labelled, 10u);
 }
 
 TEST(ConflictMarkers, ColoursFollowTheColourMapOverZeroToOne) {

@@ -63,11 +63,18 @@ roslaunch --port "${port}" "${root}/launch/demo.launch" rviz:=true rate:="${RATE
   rviz_config:="${config}" >"${log}" 2>&1 &
 launch_pid=$!
 echo "rviz_screenshot: demo running (log ${log}); waiting for the last scan's map"
+published=0
 for _ in $(seq 1 400); do
-  grep -q "published views.*over ${SCANS:-10} scans" "${log}" && break
+  grep -q "published .*over ${SCANS:-10} scans" "${log}" && { published=1; break; }
   if ! kill -0 "${launch_pid}" 2>/dev/null; then echo "demo died, see ${log}" >&2; exit 1; fi
+  # rviz is not a required node: the launch outlives it, and a picture now would show nothing.
+  if grep -q "\[rviz-[0-9]*\] process has died" "${log}"; then
+    echo "rviz died (software GL under Xvfb), see ${log}; run again" >&2
+    exit 1
+  fi
   sleep 1
 done
+((published)) || { echo "no map after the last scan within 400 s, see ${log}" >&2; exit 1; }
 sleep "${wait_draw}"
 import -window root "${out}"
 echo "rviz_screenshot: wrote ${out}"
