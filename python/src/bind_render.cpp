@@ -19,8 +19,7 @@ void bindRender(nb::module_& m) {
         if (mode == "semantic") {
           tools::writePng(path, tools::renderSemantic(tree, classes, grid, caption));
         } else if (mode == "uncertainty") {
-          tools::writePng(path,
-                          tools::renderUncertainty(tree, uncertaintyScale(tree), grid, caption));
+          tools::writePng(path, tools::renderUncertainty(tree, grid, caption));
         } else {
           throw std::invalid_argument("mode must be 'semantic' or 'uncertainty', got '" + mode +
                                       "'");

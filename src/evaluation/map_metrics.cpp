@@ -132,40 +132,4 @@ size_t occupiedWithoutEndpoint(const EvidentialOcTree& tree,
   return count;
 }
 
-// --- display range ----------------------------------------------------------------------------
-
-double UncertaintyScale::apply(double u) const {
-  double t = u;
-  if (scaled) t = max > min ? (u - min) / (max - min) : 0.0;
-  return std::min(1.0, std::max(0.0, t));
-}
-
-std::string UncertaintyScale::describe() const {
-  if (!scaled) return "uncertainty is a mass in [0,1], used as is";
-  std::ostringstream s;
-  s << "min-max scaled over the map's semantic leaves (min " << min << ", max " << max << ")";
-  return s.str();
-}
-
-UncertaintyScale uncertaintyScale(const EvidentialOcTree& tree) {
-  UncertaintyScale scale;
-  if (tree.rule().uncertaintyIsMass()) return scale;
-  scale.scaled = true;
-  double lo = std::numeric_limits<double>::infinity();
-  double hi = -std::numeric_limits<double>::infinity();
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (!it->hasSemantics()) continue;
-    const double u = tree.opinion(&*it).uncertainty;
-    lo = std::min(lo, u);
-    hi = std::max(hi, u);
-  }
-  if (lo > hi) {  // no semantic leaf at all
-    lo = 0.0;
-    hi = 1.0;
-  }
-  scale.min = lo;
-  scale.max = hi;
-  return scale;
-}
-
 }  // namespace evidential_octomap

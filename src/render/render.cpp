@@ -188,11 +188,16 @@ class QuantileScale {
   std::vector<double> sorted_;
 };
 
-// u of the highest occupied leaf of every column that has semantics (what the picture draws).
+// What the picture shows of a voxel: the probability that its label is wrong.
+double shownUncertainty(const EvidentialOcTree& tree, const EvidentialOcTreeNode* node) {
+  return tree.rule().errorProbability(tree.opinion(node));
+}
+
+// That value for the highest occupied leaf of every column that has semantics (what is drawn).
 QuantileScale drawnUncertainties(const EvidentialOcTree& tree, const std::vector<TopLeaf>& top) {
   std::vector<double> u;
   for (const TopLeaf& t : top)
-    if (t.node && t.node->hasSemantics()) u.push_back(tree.opinion(t.node).uncertainty);
+    if (t.node && t.node->hasSemantics()) u.push_back(shownUncertainty(tree, t.node));
   return QuantileScale(std::move(u));
 }
 
@@ -205,7 +210,7 @@ cv::Mat drawUncertainty(const EvidentialOcTree& tree, const std::vector<TopLeaf>
       if (!t.node) continue;
       map.at<cv::Vec3b>(r, c) =
           t.node->hasSemantics()
-              ? bgr(uncertaintyColor(scale.colourPosition(tree.opinion(t.node).uncertainty)))
+              ? bgr(uncertaintyColor(scale.colourPosition(shownUncertainty(tree, t.node))))
               : kNoSemantics;
     }
   return map;
@@ -218,15 +223,15 @@ cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const TopDownGrid& g) {
   return drawUncertainty(tree, top, drawnUncertainties(tree, top), g);
 }
 
-cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& kind,
-                          const TopDownGrid& g, const std::vector<std::string>& caption) {
+cv::Mat renderUncertainty(const EvidentialOcTree& tree, const TopDownGrid& g,
+                          const std::vector<std::string>& caption) {
   const auto top = topLeaves(tree, g);
   const QuantileScale scale = drawnUncertainties(tree, top);
   cv::Mat map = drawUncertainty(tree, top, scale, g);
   drawScaleBar(map, g);
   cv::Mat panel;
   cv::Mat canvas = compose(map, caption, &panel);
-  // Vertical colour bar: the lowest u at the bottom, the highest at the top, with u at the
+  // Vertical colour bar: the lowest value at the bottom, the highest at the top, labelled at the
   // 0, 25, 50, 75 and 100 % shares of the drawn voxels.
   const int bar_h = std::min(240, panel.rows - 130);
   for (int y = 0; y < bar_h; ++y) {
@@ -242,13 +247,13 @@ cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& 
   };
   for (int i = 0; i <= 4; ++i) {
     std::ostringstream s;
-    s << std::setprecision(3) << "u = " << scale.quantile(i / 4.0) << " (" << 25 * i << " %)";
+    s << std::setprecision(3) << scale.quantile(i / 4.0) << " (" << 25 * i << " %)";
     label(25 + int((1.0 - i / 4.0) * (bar_h - 1)), s.str());
   }
   label(44 + bar_h, "quantile scale: each");
   label(60 + bar_h, "step = an equal share");
   label(76 + bar_h, "of the drawn voxels");
-  label(92 + bar_h, kind.scaled ? "(u: Dirichlet variance)" : "(u: a mass)");
+  label(92 + bar_h, "P(label wrong) = 1 - max p");
   legendEntry(panel, (bar_h + 110) / kLine, kNoSemantics, "no evidence");
   return canvas;
 }

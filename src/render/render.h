@@ -30,8 +30,10 @@ TopDownGrid makeGrid(const EvidentialOcTree& tree, const std::vector<Query>* que
 // caption: lines printed above the image (rule, evidence source, protocol, ...).
 cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
                        const TopDownGrid& grid, const std::vector<std::string>& caption);
-cv::Mat renderUncertainty(const EvidentialOcTree& tree, const UncertaintyScale& scale,
-                          const TopDownGrid& grid, const std::vector<std::string>& caption);
+// The map's probability that each drawn voxel's label is wrong, 1 - max_c p_c
+// (FusionRule::errorProbability, the default uncertainty: docs/results.md).
+cv::Mat renderUncertainty(const EvidentialOcTree& tree, const TopDownGrid& grid,
+                          const std::vector<std::string>& caption);
 cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& queries,
                     const TopDownGrid& grid, const std::vector<std::string>& caption);
 
@@ -40,8 +42,8 @@ cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& quer
 // the mix of right (green), wrong (red) and unlabelled (blue) queries.
 cv::Mat semanticLayer(const EvidentialOcTree& tree, const ClassTable& classes,
                       const TopDownGrid& grid, std::set<int>* classes_shown = nullptr);
-// Uncertainty is coloured on a quantile scale of the drawn voxels' u (equal colour steps =
-// equal shares of the voxels; the legend of renderUncertainty gives u at 0/25/50/75/100 %).
+// Uncertainty (1 - max p) is coloured on a quantile scale of the drawn voxels' values (equal
+// colour steps = equal shares of the voxels; renderUncertainty's legend gives 0/25/50/75/100 %).
 cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const TopDownGrid& grid);
 cv::Mat errorLayer(const EvidentialOcTree& tree, const std::vector<Query>& queries,
                    const TopDownGrid& grid);

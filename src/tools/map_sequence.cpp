@@ -99,8 +99,8 @@ void runMap(const MapOptions& o) {
     };
     writePng(o.out + "/semantic.png",
              renderSemantic(*run.tree, classes, grid, caption("semantic map")));
-    writePng(o.out + "/uncertainty.png", renderUncertainty(*run.tree, uncertaintyScale(*run.tree),
-                                                           grid, caption("uncertainty")));
+    writePng(o.out + "/uncertainty.png",
+             renderUncertainty(*run.tree, grid, caption("P(label wrong) = 1 - max p")));
     writePng(o.out + "/error.png",
              renderError(*run.tree, queries, grid, caption("errors of the GT queries")));
     writePng(o.out + "/quality.png",

@@ -175,14 +175,4 @@ QualityMetrics evaluateInput(const std::vector<Query>& queries, const std::vecto
 size_t occupiedWithoutEndpoint(const EvidentialOcTree& tree,
                                const std::vector<octomap::OcTreeKey>& endpoints);
 
-// Display range of VoxelOpinion::uncertainty for renders: identity for rules whose uncertainty
-// is a mass, else min-max over the map's semantic leaves.
-struct UncertaintyScale {
-  bool scaled = false;
-  double min = 0.0, max = 1.0;
-  double apply(double u) const;  // clamped to [0, 1]
-  std::string describe() const;
-};
-UncertaintyScale uncertaintyScale(const EvidentialOcTree& tree);
-
 }  // namespace evidential_octomap
