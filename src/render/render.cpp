@@ -253,8 +253,9 @@ cv::Mat renderUncertainty(const EvidentialOcTree& tree, const TopDownGrid& g,
   label(44 + bar_h, "quantile scale: each");
   label(60 + bar_h, "step = an equal share");
   label(76 + bar_h, "of the drawn voxels");
-  label(92 + bar_h, "P(label wrong) = 1 - max p");
-  legendEntry(panel, (bar_h + 110) / kLine, kNoSemantics, "no evidence");
+  label(92 + bar_h, "P(label wrong)");
+  label(108 + bar_h, "= 1 - max p");
+  legendEntry(panel, (bar_h + 126) / kLine, kNoSemantics, "no evidence");
   return canvas;
 }
 
