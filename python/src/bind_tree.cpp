@@ -111,6 +111,9 @@ void bindResults(nb::module_& m) {
       .def_ro("conflict", &QueryResult::conflict, kShared,
               "(N,) float32 in [0, 1): share of the fused evidence that disagreed "
               "(VoxelOpinion::conflict).")
+      .def_ro("error_probability", &QueryResult::error_probability, kShared,
+              "(N,) float32: the map's probability that the label is wrong, 1 - max_c p_c "
+              "(dempster p = belief + u / C); the default uncertainty of the views.")
       .def_ro("occupied", &QueryResult::occupied, kShared,
               "(N,) bool: the voxel is known and occupied.")
       .def_ro("known", &QueryResult::known, kShared, "(N,) bool: the voxel has been observed.");
@@ -198,7 +201,7 @@ QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const Lo
   const size_t n = points.shape(0);
   const int num_classes = tree.numClasses();
   std::vector<int32_t> labels(n);
-  std::vector<float> belief(n * num_classes), uncertainty(n), conflict(n);
+  std::vector<float> belief(n * num_classes), uncertainty(n), conflict(n), error_probability(n);
   std::vector<uint8_t> occupied(n), known(n);
   const auto p = points.view();
   const auto answer = [&](size_t i, const EvidentialOcTree& map) {
@@ -208,6 +211,7 @@ QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const Lo
     labels[i] = o.label;
     uncertainty[i] = o.uncertainty;
     conflict[i] = o.conflict;
+    error_probability[i] = map.rule().errorProbability(o);
     std::copy(o.belief.begin(), o.belief.end(), belief.begin() + i * num_classes);
     known[i] = node != nullptr;
     occupied[i] = node != nullptr && map.isNodeOccupied(node);
@@ -225,6 +229,7 @@ QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const Lo
   return {
       toNumpy(std::move(labels), {n}),      toNumpy(std::move(belief), {n, size_t(num_classes)}),
       toNumpy(std::move(uncertainty), {n}), toNumpy(std::move(conflict), {n}),
+      toNumpy(std::move(error_probability), {n}),
       toNumpyBool(std::move(occupied)),     toNumpyBool(std::move(known))};
 }
 

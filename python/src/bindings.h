@@ -62,6 +62,7 @@ struct QueryResult {
   Array<float> belief;       // (N, C)
   Array<float> uncertainty;  // (N,)
   Array<float> conflict;     // (N,)
+  Array<float> error_probability;  // (N,) 1 - max_c p_c (FusionRule::errorProbability)
   Array<bool> occupied;      // (N,) the voxel is known and occupied
   Array<bool> known;         // (N,) the voxel exists in the map (observed)
 };

@@ -30,6 +30,15 @@ def test_wall_voxels_take_the_class_of_their_evidence():
     assert ((answer.conflict >= 0) & (answer.conflict < 0.5)).all()
 
 
+def test_error_probability_is_one_minus_the_largest_projected_probability():
+    tree, points = wall_tree()
+    answer = tree.query(points)
+    projected = answer.belief + answer.uncertainty[:, None] / 3
+    np.testing.assert_allclose(answer.error_probability, 1.0 - projected.max(axis=1), atol=1e-6)
+    unknown = tree.query(np.array([[50.0, 50.0, 50.0]], dtype=np.float32))
+    assert unknown.labels[0] == -1 and unknown.error_probability[0] > 0.66
+
+
 def test_disagreeing_evidence_raises_the_conflict():
     tree = eo.EvidentialOcTree(0.2, 3)
     points, car = wall(label=1)
