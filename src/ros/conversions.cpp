@@ -336,14 +336,14 @@ std::string readPointEvidence(const uint8_t* p, const SemanticFields& f, int C, 
   }
 }
 
-// The common layout (x, y, z and a C-float `evidence` block, float32, host byte order) read with
-// plain copies: the general per-value reader costs ~30 ms for 120k points and 20 classes.
-// Returns false, with `out` unspecified, when the layout is another or a value is not valid;
-// the general reader then reads the cloud again and says what is wrong.
 std::string noFinitePoints(size_t nonfinite) {
   return "cloud has no finite points (" + std::to_string(nonfinite) + " NaN/inf)";
 }
 
+// The common layout (x, y, z and a C-float `evidence` block, float32, host byte order) read with
+// plain copies: 3 ms for 123k points and 20 classes, where the general per-value reader takes 20.
+// Returns false, with `out` unspecified, when the layout is another or a value is not valid;
+// the general reader then reads the cloud again and says what is wrong.
 bool readPackedFloatCloud(const sensor_msgs::PointCloud2& msg, const FieldRef xyz[3],
                           const SemanticFields& fields, int C, SemanticCloud* out) {
   if (msg.is_bigendian || fields.input != EvidenceInput::kEvidence) return false;
