@@ -154,7 +154,9 @@ TEST(FusionRules, ErrorProbabilityIsOneMinusTheLargestProjectedProbability) {
   EXPECT_NEAR(dempster->errorProbability(o), 1.0 - (0.5 + 0.2 / 3), 1e-6);
   const auto sbki = FusionRule::create(FusionRuleType::kSbki);  // belief: alpha / S itself
   EXPECT_NEAR(sbki->errorProbability(o), 0.5, 1e-6);
-  EXPECT_EQ(dempster->errorProbability(VoxelOpinion()), 1.0f);  // no belief: nothing known
+  EXPECT_EQ(dempster->errorProbability(VoxelOpinion()), 1.0f);  // no label: none is right
+  o.label = -1;
+  EXPECT_EQ(dempster->errorProbability(o), 1.0f);
 }
 
 TEST(DempsterRule, ContributionMatchesHandComputation) {

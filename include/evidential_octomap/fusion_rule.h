@@ -68,7 +68,7 @@ class FusionRule {
   // sbki/ebs the expected probabilities it holds. The Brier score and ECE are of these.
   std::vector<float> probabilities(const VoxelOpinion& opinion) const;
   // 1 - max_c p_c: the map's own probability that the voxel's label is wrong, the uncertainty
-  // that detects wrong labels best across datasets (docs/results.md); 1 when it has no belief.
+  // that detects wrong labels best across datasets (docs/results.md); 1 without a label.
   float errorProbability(const VoxelOpinion& opinion) const;
 
   // The rule of a map's settings (rule, sbki_prior, evidence_cap).

@@ -11,7 +11,8 @@ Topics (Foxglove schemas, protobuf):
 
 * ``/map/voxels/class``, ``/map/voxels/uncertainty``, ``/map/voxels/conflict`` (SceneUpdate):
   the occupied leaves as cubes of their size, coloured by class (the class table's colours, grey
-  without evidence), by uncertainty or by conflict (dark blue 0 -> yellow 1); choose the view by
+  without evidence), by uncertainty (the probability that the label is wrong, 1 - max p) or by
+  conflict (dark blue 0 -> yellow 1); choose the view by
   the topic in the 3D panel. One entity ``voxels`` per topic, replaced at each publication.
 * ``/map/cloud`` (PointCloud): the current cloud in the map frame, with its class
   (argmax of the evidence) as a field to colour by.
@@ -131,8 +132,8 @@ def voxel_colors(leaves, classes, view: str) -> np.ndarray:
                              [[0.6, 0.6, 0.6]]])
         labels = np.where(leaves.labels >= 0, leaves.labels, len(palette) - 1)
         rgba[:, :3] = palette[labels]
-    elif view == "uncertainty":
-        rgba[:, :3] = ramp(leaves.uncertainty)
+    elif view == "uncertainty":  # the default uncertainty: P(label wrong) = 1 - max p
+        rgba[:, :3] = ramp(leaves.error_probability)
     elif view == "conflict":
         rgba[:, :3] = ramp(leaves.conflict)
     else:

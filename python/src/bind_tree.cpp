@@ -28,6 +28,7 @@ struct Leaves {
   Array<int32_t> labels;     // (M,)
   Array<float> uncertainty;  // (M,)
   Array<float> conflict;     // (M,)
+  Array<float> error_probability;  // (M,) 1 - max_c p_c
   Array<float> belief;       // (M, C)
 };
 
@@ -42,7 +43,7 @@ void checkRows(const MatrixIn& evidence, size_t points, int num_classes) {
 
 Leaves leaves(const EvidentialOcTree& tree, bool occupied_only) {
   const int num_classes = tree.numClasses();
-  std::vector<float> centers, sizes, occupancy, uncertainty, conflict, belief;
+  std::vector<float> centers, sizes, occupancy, uncertainty, conflict, error_probability, belief;
   std::vector<int32_t> labels;
   {
     nb::gil_scoped_release release;
@@ -56,6 +57,7 @@ Leaves leaves(const EvidentialOcTree& tree, bool occupied_only) {
       labels.push_back(o.label);
       uncertainty.push_back(o.uncertainty);
       conflict.push_back(o.conflict);
+      error_probability.push_back(tree.rule().errorProbability(o));
       belief.insert(belief.end(), o.belief.begin(), o.belief.end());
     }
   }
@@ -66,6 +68,7 @@ Leaves leaves(const EvidentialOcTree& tree, bool occupied_only) {
           toNumpy(std::move(labels), {m}),
           toNumpy(std::move(uncertainty), {m}),
           toNumpy(std::move(conflict), {m}),
+          toNumpy(std::move(error_probability), {m}),
           toNumpy(std::move(belief), {m, size_t(num_classes)})};
 }
 
@@ -124,6 +127,8 @@ void bindResults(nb::module_& m) {
       .def_ro("labels", &Leaves::labels, kShared, "(M,) int32 argmax class, -1 without evidence.")
       .def_ro("uncertainty", &Leaves::uncertainty, kShared, "(M,) float32.")
       .def_ro("conflict", &Leaves::conflict, kShared, "(M,) float32.")
+      .def_ro("error_probability", &Leaves::error_probability, kShared,
+              "(M,) float32: 1 - max_c p_c, the probability that the label is wrong.")
       .def_ro("belief", &Leaves::belief, kShared, "(M, C) float32.");
   nb::class_<InsertStats>(m, "InsertStats", "What one insert_scan did.")
       .def_ro("points_in", &InsertStats::points_in)

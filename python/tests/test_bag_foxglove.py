@@ -12,7 +12,8 @@ pytest.importorskip("foxglove", reason="the bags extra: pip install '.[bags]'")
 websockets = pytest.importorskip("websockets", reason="the test extra: pip install '.[test]'")
 
 import evidential_octomap as eo  # noqa: E402
-from evidential_octomap.foxglove_view import FoxgloveView, encode_cubes, encode_scene_update  # noqa: E402
+from evidential_octomap.foxglove_view import (FoxgloveView, encode_cubes,  # noqa: E402
+                                              encode_scene_update, ramp, voxel_colors)
 from foxglove import messages as fm  # noqa: E402
 from conftest import wall  # noqa: E402
 
@@ -73,6 +74,14 @@ def wall_map():
     tree = eo.EvidentialOcTree(0.2, classes)
     tree.insert_scan(points, evidence, origin=(0, 0, 0))
     return tree, classes
+
+
+def test_the_uncertainty_view_shows_the_probability_that_the_label_is_wrong(wall_map):
+    tree, classes = wall_map
+    leaves = tree.leaves(occupied_only=True)
+    colours = voxel_colors(leaves, classes, "uncertainty")[:, :3]
+    np.testing.assert_allclose(colours, ramp(leaves.error_probability))
+    assert not np.allclose(colours, ramp(leaves.uncertainty))  # not the vacuity u
 
 
 def test_the_vectorised_encoder_writes_the_sdks_own_scene_update_bytes():

@@ -36,7 +36,7 @@ def test_error_probability_is_one_minus_the_largest_projected_probability():
     projected = answer.belief + answer.uncertainty[:, None] / 3
     np.testing.assert_allclose(answer.error_probability, 1.0 - projected.max(axis=1), atol=1e-6)
     unknown = tree.query(np.array([[50.0, 50.0, 50.0]], dtype=np.float32))
-    assert unknown.labels[0] == -1 and unknown.error_probability[0] > 0.66
+    assert unknown.labels[0] == -1 and unknown.error_probability[0] == 1.0  # no label
 
 
 def test_disagreeing_evidence_raises_the_conflict():
@@ -71,6 +71,7 @@ def test_leaves_agree_with_queries_at_their_centres():
     answer = tree.query(leaves.centers)
     np.testing.assert_array_equal(answer.labels, leaves.labels)
     np.testing.assert_array_equal(answer.belief, leaves.belief)
+    np.testing.assert_array_equal(answer.error_probability, leaves.error_probability)
     occupied = tree.leaves(occupied_only=True)
     assert (occupied.occupancy > 0.5).all() and len(occupied.sizes) < len(leaves.sizes)
 

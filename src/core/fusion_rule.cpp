@@ -163,7 +163,7 @@ std::vector<float> FusionRule::probabilities(const VoxelOpinion& opinion) const 
 }
 
 float FusionRule::errorProbability(const VoxelOpinion& opinion) const {
-  if (opinion.belief.empty()) return 1.0f;
+  if (opinion.label < 0 || opinion.belief.empty()) return 1.0f;  // no label: none is right
   const std::vector<float> p = probabilities(opinion);
   return 1.0f - *std::max_element(p.begin(), p.end());
 }
