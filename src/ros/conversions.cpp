@@ -544,11 +544,12 @@ sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
                                        const ClassTable& classes, const std::string& frame_id) {
   sensor_msgs::PointCloud2 msg;
   msg.header.frame_id = frame_id;
-  const char* names[7] = {"x", "y", "z", "label", "uncertainty", "rgb", "conflict"};
-  const uint8_t types[7] = {PointField::FLOAT32, PointField::FLOAT32, PointField::FLOAT32,
+  const char* names[8] = {"x",   "y",        "z", "label", "uncertainty", "rgb", "conflict",
+                          "error_probability"};
+  const uint8_t types[8] = {PointField::FLOAT32, PointField::FLOAT32, PointField::FLOAT32,
                             PointField::INT32,   PointField::FLOAT32, PointField::FLOAT32,
-                            PointField::FLOAT32};
-  for (int i = 0; i < 7; ++i) {
+                            PointField::FLOAT32, PointField::FLOAT32};
+  for (int i = 0; i < 8; ++i) {
     PointField f;
     f.name = names[i];
     f.offset = 4 * i;
@@ -556,7 +557,7 @@ sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
     f.count = 1;
     msg.fields.push_back(f);
   }
-  msg.point_step = 28;
+  msg.point_step = 32;
   msg.height = 1;
   msg.width = static_cast<uint32_t>(voxels.size());
   msg.row_step = msg.point_step * msg.width;
@@ -575,6 +576,7 @@ sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
     std::memcpy(p + 16, &v.uncertainty, 4);
     std::memcpy(p + 20, &rgb, 4);
     std::memcpy(p + 24, &v.conflict, 4);
+    std::memcpy(p + 28, &v.error_probability, 4);
     p += msg.point_step;
   }
   return msg;

@@ -101,7 +101,7 @@ size_t keepHeightBand(const octomap::pose6d& T_F_S, const HeightBand& band, int 
                       SemanticCloud* scan);
 
 // Voxel centres as PointCloud2: x, y, z (float32), label (int32), uncertainty (float32),
-// rgb (float32-packed class colour, grey when unlabelled), conflict (float32).
+// rgb (float32-packed class colour, grey when unlabelled), conflict, error_probability (float32).
 sensor_msgs::PointCloud2 toPointCloud2(const std::vector<VoxelView>& voxels,
                                        const ClassTable& classes, const std::string& frame_id);
 

@@ -559,14 +559,19 @@ TEST(ToPointCloud2, FieldsHoldLabelUncertaintyAndClassColour) {
   voxels[0].label = 1;
   voxels[0].uncertainty = 0.25f;
   voxels[0].conflict = 0.125f;
+  voxels[0].error_probability = 0.375f;
   voxels[1].label = -1;
   const auto msg = toPointCloud2(voxels, fourClasses(), "map");
   ASSERT_EQ(msg.width, 2u);
-  ASSERT_EQ(msg.fields.size(), 7u);
+  ASSERT_EQ(msg.fields.size(), 8u);
   EXPECT_EQ(msg.fields[6].name, "conflict");
-  float conflict;
+  EXPECT_EQ(msg.fields[7].name, "error_probability");
+  float conflict, error_probability;
   std::memcpy(&conflict, msg.data.data() + msg.fields[6].offset, 4);
+  std::memcpy(&error_probability, msg.data.data() + msg.fields[7].offset, 4);
   EXPECT_FLOAT_EQ(conflict, 0.125f);
+  EXPECT_FLOAT_EQ(error_probability, 0.375f);
+  EXPECT_EQ(msg.point_step, 32u);
   EXPECT_EQ(msg.header.frame_id, "map");
   // Read it back through the same reader's layout rules.
   int32_t label;
