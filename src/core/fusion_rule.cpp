@@ -164,8 +164,10 @@ std::vector<float> FusionRule::probabilities(const VoxelOpinion& opinion) const 
 
 float FusionRule::errorProbability(const VoxelOpinion& opinion) const {
   if (opinion.label < 0 || opinion.belief.empty()) return 1.0f;  // no label: none is right
-  const std::vector<float> p = probabilities(opinion);
-  return 1.0f - *std::max_element(p.begin(), p.end());
+  // max_c p_c without building p: dempster adds the same share u / C to every class.
+  const float best = *std::max_element(opinion.belief.begin(), opinion.belief.end());
+  const float share = uncertaintyIsMass() ? opinion.uncertainty / float(opinion.belief.size()) : 0;
+  return 1.0f - (best + share);
 }
 
 void FusionRule::add(float* payload, const double* increments, int num_classes) const {

@@ -188,30 +188,34 @@ class QuantileScale {
   std::vector<double> sorted_;
 };
 
-// What the picture shows of a voxel: the probability that its label is wrong.
-double shownUncertainty(const EvidentialOcTree& tree, const EvidentialOcTreeNode* node) {
-  return tree.rule().errorProbability(tree.opinion(node));
+// What the picture shows of each column's highest occupied leaf: the probability that its label
+// is wrong; NaN where nothing with semantics is drawn. Read once, for the scale and the colours.
+std::vector<double> shownUncertainties(const EvidentialOcTree& tree,
+                                       const std::vector<TopLeaf>& top) {
+  std::vector<double> shown(top.size(), std::nan(""));
+  for (size_t i = 0; i < top.size(); ++i)
+    if (top[i].node && top[i].node->hasSemantics())
+      shown[i] = tree.rule().errorProbability(tree.opinion(top[i].node));
+  return shown;
 }
 
-// That value for the highest occupied leaf of every column that has semantics (what is drawn).
-QuantileScale drawnUncertainties(const EvidentialOcTree& tree, const std::vector<TopLeaf>& top) {
-  std::vector<double> u;
-  for (const TopLeaf& t : top)
-    if (t.node && t.node->hasSemantics()) u.push_back(shownUncertainty(tree, t.node));
-  return QuantileScale(std::move(u));
+QuantileScale scaleOf(const std::vector<double>& shown) {
+  std::vector<double> drawn;
+  for (double v : shown)
+    if (!std::isnan(v)) drawn.push_back(v);
+  return QuantileScale(std::move(drawn));
 }
 
-cv::Mat drawUncertainty(const EvidentialOcTree& tree, const std::vector<TopLeaf>& top,
+cv::Mat drawUncertainty(const std::vector<TopLeaf>& top, const std::vector<double>& shown,
                         const QuantileScale& scale, const TopDownGrid& g) {
   cv::Mat map(g.height, g.width, CV_8UC3, cv::Scalar(255, 255, 255));
   for (int r = 0; r < g.height; ++r)
     for (int c = 0; c < g.width; ++c) {
-      const TopLeaf& t = top[size_t(r) * g.width + c];
-      if (!t.node) continue;
-      map.at<cv::Vec3b>(r, c) =
-          t.node->hasSemantics()
-              ? bgr(uncertaintyColor(scale.colourPosition(shownUncertainty(tree, t.node))))
-              : kNoSemantics;
+      const size_t i = size_t(r) * g.width + c;
+      if (!top[i].node) continue;
+      map.at<cv::Vec3b>(r, c) = std::isnan(shown[i])
+                                    ? kNoSemantics
+                                    : bgr(uncertaintyColor(scale.colourPosition(shown[i])));
     }
   return map;
 }
@@ -220,14 +224,16 @@ cv::Mat drawUncertainty(const EvidentialOcTree& tree, const std::vector<TopLeaf>
 
 cv::Mat uncertaintyLayer(const EvidentialOcTree& tree, const TopDownGrid& g) {
   const auto top = topLeaves(tree, g);
-  return drawUncertainty(tree, top, drawnUncertainties(tree, top), g);
+  const std::vector<double> shown = shownUncertainties(tree, top);
+  return drawUncertainty(top, shown, scaleOf(shown), g);
 }
 
 cv::Mat renderUncertainty(const EvidentialOcTree& tree, const TopDownGrid& g,
                           const std::vector<std::string>& caption) {
   const auto top = topLeaves(tree, g);
-  const QuantileScale scale = drawnUncertainties(tree, top);
-  cv::Mat map = drawUncertainty(tree, top, scale, g);
+  const std::vector<double> shown = shownUncertainties(tree, top);
+  const QuantileScale scale = scaleOf(shown);
+  cv::Mat map = drawUncertainty(top, shown, scale, g);
   drawScaleBar(map, g);
   cv::Mat panel;
   cv::Mat canvas = compose(map, caption, &panel);
