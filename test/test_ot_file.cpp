@@ -16,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <memory>
@@ -593,19 +594,17 @@ TEST(ColorExport, ClassColoursSurviveAbstractOcTreeRead) {
   EXPECT_GT(grey, 0u);
 }
 
-TEST(ColorExport, UncertaintyColoursFollowTheColourMap) {
+// Each leaf's colour is uncertaintyColor of the value the mode names, computed here from the
+// leaf's opinion: P(label wrong) = 1 - max p over [0, 1 - 1/C], or the vacuity u over [0, 1].
+static void expectColoursOf(ColorMode mode, const std::function<double(const VoxelOpinion&)>& value) {
   const auto tree = makeMap("dempster");
-  const auto color = toColorOcTree(*tree, threeClasses(), ColorMode::kUncertainty);
-  // Certain is blue-ish, uncertain red-ish.
-  const ClassTable::Rgb certain = uncertaintyColor(0.0), uncertain = uncertaintyColor(1.0);
-  EXPECT_GT(certain[2], certain[0]);
-  EXPECT_GT(uncertain[0], uncertain[2]);
+  const auto color = toColorOcTree(*tree, threeClasses(), mode);
   size_t checked = 0;
   std::set<std::tuple<int, int, int>> distinct;
   for (auto it = tree->begin_leafs(); it != tree->end_leafs(); ++it) {
     if (!it->hasSemantics()) continue;
     const auto c = color->search(it.getKey(), it.getDepth())->getColor();
-    const ClassTable::Rgb expected = uncertaintyColor(tree->opinion(&*it).uncertainty);
+    const ClassTable::Rgb expected = uncertaintyColor(value(tree->opinion(&*it)));
     ASSERT_EQ(c.r, expected[0]);
     ASSERT_EQ(c.g, expected[1]);
     ASSERT_EQ(c.b, expected[2]);
@@ -614,6 +613,30 @@ TEST(ColorExport, UncertaintyColoursFollowTheColourMap) {
   }
   EXPECT_GT(checked, 100u);
   EXPECT_GT(distinct.size(), 3u);  // the map is not one colour
+}
+
+TEST(ColorExport, UncertaintyColoursShowTheProbabilityThatTheLabelIsWrong) {
+  // Certain is blue-ish, uncertain red-ish.
+  const ClassTable::Rgb certain = uncertaintyColor(0.0), uncertain = uncertaintyColor(1.0);
+  EXPECT_GT(certain[2], certain[0]);
+  EXPECT_GT(uncertain[0], uncertain[2]);
+  expectColoursOf(ColorMode::kUncertainty, [](const VoxelOpinion& o) {
+    const float u = o.uncertainty, c = float(o.belief.size());
+    if (o.label < 0) return 1.0f / (1.0f - 1.0f / c);  // no label: none is right
+    const float max_p = *std::max_element(o.belief.begin(), o.belief.end()) + u / c;
+    return (1.0f - max_p) / (1.0f - 1.0f / c);
+  });
+}
+
+TEST(ColorExport, VacuityColoursShowU) {
+  expectColoursOf(ColorMode::kVacuity, [](const VoxelOpinion& o) { return o.uncertainty; });
+}
+
+TEST(ColorExport, ModesAreNamedOnce) {
+  EXPECT_EQ(colorModeFromName("class"), ColorMode::kClass);
+  EXPECT_EQ(colorModeFromName("uncertainty"), ColorMode::kUncertainty);
+  EXPECT_EQ(colorModeFromName("vacuity"), ColorMode::kVacuity);
+  EXPECT_THROW(colorModeFromName("rainbow"), std::invalid_argument);
 }
 
 TEST(ColorExport, ClassTableOfWrongSizeThrows) {

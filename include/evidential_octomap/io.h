@@ -60,11 +60,18 @@ std::unique_ptr<EvidentialOcTree> loadMap(std::istream& in, const std::string& p
 // `tree` is a completely read EvidentialOcTree, else why not (also for nullptr and other types).
 std::string readProblem(const octomap::AbstractOcTree* tree);
 
-enum class ColorMode { kClass, kUncertainty };
+// What a ColorOcTree's colours show (blue = certain ... red = uncertain for the last two):
+//   kClass:       the argmax class, in the class table's colours;
+//   kUncertainty: the default uncertainty, the probability that the label is wrong, 1 - max p
+//                 (FusionRule::errorProbability), over [0, 1 - 1/C] (red: no class preferred);
+//   kVacuity:     dempster's vacuity u over [0, 1]; sbki/ebs: the label's Dirichlet variance
+//                 over [0, the map's largest].
+enum class ColorMode { kClass, kUncertainty, kVacuity };
+// "class", "uncertainty" or "vacuity" (the CLI's --mode, the node's ~full_map_colors, Python).
+ColorMode colorModeFromName(const std::string& name);
 
-// ColorOcTree with the same occupancy; occupied semantic leaves coloured by argmax class
-// (colours from `classes`) or by uncertainty (blue = certain ... red = uncertain). Leaves without
-// evidence are grey. The result opens in octovis and every stock OctoMap tool.
+// ColorOcTree with the same occupancy; semantic leaves coloured as `mode` says, leaves without
+// evidence grey. The result opens in octovis and every stock OctoMap tool.
 std::unique_ptr<octomap::ColorOcTree> toColorOcTree(const EvidentialOcTree& tree,
                                                     const ClassTable& classes, ColorMode mode);
 

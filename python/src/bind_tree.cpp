@@ -97,12 +97,6 @@ std::unique_ptr<EvidentialOcTree> makeTree(double resolution, const std::vector<
   return tree;
 }
 
-ColorMode colorModeFromName(const std::string& mode) {
-  if (mode == "class") return ColorMode::kClass;
-  if (mode == "uncertainty") return ColorMode::kUncertainty;
-  throw std::invalid_argument("colour mode must be 'class' or 'uncertainty', got '" + mode + "'");
-}
-
 void bindResults(nb::module_& m) {
   nb::class_<QueryResult>(m, "QueryResult", "Per-point answers of EvidentialOcTree.query.")
       .def_ro("labels", &QueryResult::labels, kShared,
@@ -358,7 +352,8 @@ void bindTree(nb::module_& m) {
             return toColorOcTree(t, classes, colorModeFromName(mode));
           },
           nb::arg("classes"), nb::arg("mode") = "class",
-          "ColorOcTree coloured by class ('class') or uncertainty ('uncertainty').")
+          "ColorOcTree coloured by class ('class'), the probability that the label is wrong "
+          "('uncertainty', 1 - max p) or the vacuity u ('vacuity').")
       .def("copy", [](const Tree& t) { return std::make_unique<Tree>(t); })
       .def("__copy__", [](const Tree& t) { return std::make_unique<Tree>(t); })
       .def("clear", &Tree::clear)

@@ -185,9 +185,10 @@ def test_color_octree_uses_the_class_table(kitti_classes):
     points, evidence = wall(num_classes=kitti_classes.num_classes, label=1)  # car
     tree.insert_scan(points, evidence, origin=ORIGIN)
     colored = tree.to_color_octree(kitti_classes)
+    assert tree.to_color_octree(kitti_classes, "vacuity").num_leaves == colored.num_leaves
     assert colored.num_leaves == tree.num_leaves
     assert (colored.colors(points) == kitti_classes.colors[1]).all()
-    with pytest.raises(ValueError, match="'class' or 'uncertainty'"):
+    with pytest.raises(ValueError, match="'class', 'uncertainty'"):
         tree.to_color_octree(kitti_classes, "rainbow")
     with pytest.raises(ValueError, match="class table has 20 classes, the map 3"):
         wall_tree()[0].to_color_octree(kitti_classes)

@@ -163,15 +163,23 @@ ClassTable::Rgb uncertaintyColor(double t) {
   return rgb;
 }
 
+ColorMode colorModeFromName(const std::string& name) {
+  if (name == "class") return ColorMode::kClass;
+  if (name == "uncertainty") return ColorMode::kUncertainty;
+  if (name == "vacuity") return ColorMode::kVacuity;
+  throw std::invalid_argument("colours must be 'class', 'uncertainty' (P(label wrong)) or "
+                              "'vacuity', not '" + name + "'");
+}
+
 std::unique_ptr<octomap::ColorOcTree> toColorOcTree(const EvidentialOcTree& tree,
                                                     const ClassTable& classes, ColorMode mode) {
   if (classes.numClasses() != tree.numClasses()) {
     throw std::invalid_argument("class table has " + std::to_string(classes.numClasses()) +
                                 " classes, the map " + std::to_string(tree.numClasses()));
   }
-  // Uncertainty of Dirichlet rules is a variance: scale it by the map's largest value.
+  // The vacuity of Dirichlet rules is a variance: scaled by the map's largest value.
   float max_uncertainty = 1.0f;
-  if (mode == ColorMode::kUncertainty && !tree.rule().uncertaintyIsMass()) {
+  if (mode == ColorMode::kVacuity && !tree.rule().uncertaintyIsMass()) {
     max_uncertainty = 0.0f;
     for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
       if (it->hasSemantics()) {
@@ -180,6 +188,7 @@ std::unique_ptr<octomap::ColorOcTree> toColorOcTree(const EvidentialOcTree& tree
     }
     if (!(max_uncertainty > 0.0f)) max_uncertainty = 1.0f;
   }
+  const float max_error = 1.0f - 1.0f / float(tree.numClasses());  // every class alike
   // Same node structure as the source (pruned blocks stay blocks): serialise it in
   // ColorOcTree's own data format and let ColorOcTree read it.
   std::stringstream data;
@@ -188,7 +197,9 @@ std::unique_ptr<octomap::ColorOcTree> toColorOcTree(const EvidentialOcTree& tree
     if (node->hasSemantics()) {
       const VoxelOpinion o = tree.opinion(node);
       if (mode == ColorMode::kClass && o.label >= 0) rgb = classes.colors[o.label];
-      if (mode == ColorMode::kUncertainty) rgb = uncertaintyColor(o.uncertainty / max_uncertainty);
+      if (mode == ColorMode::kVacuity) rgb = uncertaintyColor(o.uncertainty / max_uncertainty);
+      if (mode == ColorMode::kUncertainty)
+        rgb = uncertaintyColor(tree.rule().errorProbability(o) / max_error);
     }
     const float value = node->getValue();
     data.write(reinterpret_cast<const char*>(&value), sizeof(value));

@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <variant>
 
+#include "evidential_octomap/io.h"
 #include "evidential_octomap/settings.h"
 
 namespace evidential_octomap {
@@ -89,8 +90,11 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
     throw std::invalid_argument("~pointcloud_min_z must be < ~pointcloud_max_z");
   if (!(c.occupancy_band.min_z < c.occupancy_band.max_z))
     throw std::invalid_argument("~occupancy_min_z must be < ~occupancy_max_z");
-  if (c.full_map_colors != "class" && c.full_map_colors != "uncertainty")
-    throw std::invalid_argument("~full_map_colors must be 'class' or 'uncertainty'");
+  try {
+    colorModeFromName(c.full_map_colors);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("~full_map_colors: ") + e.what());
+  }
   if (c.insert_queue_size < 1) throw std::invalid_argument("~insert_queue_size must be >= 1");
   if (!(c.probability_evidence >= 0.0))
     throw std::invalid_argument("~probability_evidence must be >= 0");

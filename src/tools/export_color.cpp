@@ -1,4 +1,4 @@
-// `evidential_octomap export`: ColorOcTree (class or uncertainty colours) for octovis and other
+// `evidential_octomap export`: ColorOcTree (class, uncertainty or vacuity colours) for octovis and other
 // stock OctoMap tools, and the occupancy-only .bt.
 #include <cmath>
 #include <iostream>
@@ -44,8 +44,7 @@ void runExport(const ExportOptions& o) {
                                " classes, but " + o.map + " has " +
                                std::to_string(tree->numClasses()));
     }
-    const ColorMode mode = o.mode == "class" ? ColorMode::kClass : ColorMode::kUncertainty;
-    const auto color = toColorOcTree(*tree, classes, mode);
+    const auto color = toColorOcTree(*tree, classes, colorModeFromName(o.mode));
     writeFileAtomically(o.color_octree, [&](std::ostream& out) {
       return color->write(out) && out.good();  // a killed export leaves the old file whole
     });
@@ -62,13 +61,14 @@ void runExport(const ExportOptions& o) {
 void addExportCommand(CLI::App& app) {
   auto o = std::make_shared<ExportOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "export", "Export a map to OctoMap's ColorOcTree (argmax class or uncertainty colours) "
+      "export", "Export a map to OctoMap's ColorOcTree (class, uncertainty or vacuity colours) "
                 "and/or an occupancy-only .bt");
   cmd->add_option("--map", o->map, "Input map (.ot)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--color-octree", o->color_octree, "Output ColorOcTree (.ot)");
   cmd->add_option("--binary", o->binary, "Output occupancy-only OcTree (.bt)");
-  cmd->add_option("--mode", o->mode, "Colours: class or uncertainty")
-      ->check(CLI::IsMember({"class", "uncertainty"}))
+  cmd->add_option("--mode", o->mode,
+                  "Colours: class, uncertainty (P(label wrong) = 1 - max p) or vacuity (u)")
+      ->check(CLI::IsMember({"class", "uncertainty", "vacuity"}))
       ->capture_default_str();
   cmd->add_option("--classes", o->classes,
                   "Class table YAML for class colours (default: generated palette)")
