@@ -173,7 +173,7 @@ if ((write_docs)); then
         echo
         echo "### The live node fed by the player (bench/live_rate.py)"
         echo
-        echo "\`mapping.launch\` and \`play_semantickitti.py\` looping the bundled scans, on the same 2 cores;"
+        echo "\`mapping.launch\` (live profile, max range 50 m) and \`play_semantickitti.py\` looping the bundled scans, on the same 2 cores;"
         echo "figures after the first minute (\`~status\`), from \`${sequences##*/}/live_rate/summary.json\`:"
         echo
         /usr/bin/python3 -c 'import json, sys
