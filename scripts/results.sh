@@ -3,7 +3,8 @@
 # (every rule x evidence source x protocol on the bundled scans), results_ablation.md (kernel
 # ablations of the default), images/quality_learned.png, and the cross-dataset block,
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
-# cross_dataset.sh). Each page is stamped with the commit and date.
+# cross_dataset.sh), and results_vertical_support.md (scripts/calibration/across_datasets.sh).
+# Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
 # CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
 set -euo pipefail
@@ -41,5 +42,9 @@ publish results_ablation.md "Kernel and down-sampling ablations of the default (
 cp "${out}/learned/quality.png" "${root}/docs/images/quality_learned.png"
 
 if [ "${CROSS:-1}" != 0 ]; then
-  SCANS="${SCANS:-12}" bash "${root}/scripts/calibration/cross_dataset.sh" "${out}/cross_dataset"
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/cross_dataset.sh" "${out}/cross_dataset"
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
+    dempster,dempster:vertical_support=0.75,dempster:vertical_support=0.5 \
+    results_vertical_support.md "The kernel support's height (vertical_support) across datasets" \
+    "${out}/across_datasets"
 fi

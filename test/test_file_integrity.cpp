@@ -186,6 +186,22 @@ void decodeLogOdds(const std::string& in, size_t* at, int width, const std::vect
   }
 }
 
+// The same map as format 7 wrote it (no vertical_support: the f64 before the node count), from a
+// format-8 file of a map with a ball support.
+std::string toFormat7(const std::string& bytes, const EvidentialOcTree& tree) {
+  EXPECT_EQ(tree.config().vertical_support, 1.0) << "format 7 cannot say otherwise";
+  const size_t s = sectionStart(bytes);
+  const size_t field = rootOffset(bytes, tree.size()) - 8 - 8;
+  double value = 0.0;
+  std::memcpy(&value, &bytes[field], 8);
+  EXPECT_EQ(value, 1.0);
+  std::string old = bytes.substr(0, field) + bytes.substr(field + 8);
+  const uint32_t seven = 7;
+  std::memcpy(&old[s + kVersionOffset], &seven, 4);
+  reseal(&old);
+  return old;
+}
+
 // The same map as format 6 wrote it (no semantic_occupied_only: the u8 before the node count),
 // from a format-7 file of a map without it.
 std::string toFormat6(const std::string& bytes, const EvidentialOcTree& tree) {
@@ -308,7 +324,7 @@ TEST(Integrity, NoAlteredFileLoadsAsADifferentMap) {
   RecordProperty("same", std::to_string(same));
 }
 
-TEST(Integrity, Format1To6FilesStillLoad) {
+TEST(Integrity, Format1To7FilesStillLoad) {
   Scratch scratch;
   for (const std::string rule : {"dempster", "ebs"}) {
     SemanticConfig config;
@@ -321,17 +337,19 @@ TEST(Integrity, Format1To6FilesStillLoad) {
       evidence.insert(evidence.end(), {float(i), 2.0f, i % 3 ? 0.0f : 0.5f});
     }
     tree->insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.5f));
-    const std::string v6 = toFormat6(otBytes(*tree), *tree), v4 = toFormat4(v6, *tree),
-                      v2 = toFormat2(v4, *tree);
+    const std::string v7 = toFormat7(otBytes(*tree), *tree), v6 = toFormat6(v7, *tree),
+                      v4 = toFormat4(v6, *tree), v2 = toFormat2(v4, *tree);
     ASSERT_GT(v4.size(), v6.size()) << "format 4 stores f32 log-odds";
     ASSERT_GT(v2.size(), v4.size()) << "format 2 stores inner payloads";
-    for (const auto& [file, format] : {std::pair(v6, "format 6"), std::pair(v4, "format 4")}) {
+    for (const auto& [file, format] :
+         {std::pair(v7, "format 7"), std::pair(v6, "format 6"), std::pair(v4, "format 4")}) {
       const std::string path = scratch.file("format.ot");
       writeBytes(path, file);
       std::unique_ptr<EvidentialOcTree> loaded;
       ASSERT_NO_THROW(loaded = loadMap(path)) << rule << ", " << format;
       EXPECT_TRUE(compareTrees(*tree, *loaded)) << rule << ", " << format;
       EXPECT_FALSE(loaded->config().semantic_occupied_only) << format;
+      EXPECT_EQ(loaded->config().vertical_support, 1.0) << format << ": a ball, as then";
     }
     // Formats before 4 predate the evidence cap: their maps are read without one.
     config.evidence_cap = 0.0;
@@ -355,8 +373,8 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   Scratch scratch;
   const auto tree = smallMap();
   ASSERT_TRUE(tree->getRoot()->hasSemantics());
-  const std::string v7 = otBytes(*tree), v4 = toFormat4(toFormat6(v7, *tree), *tree),
-                    v2 = toFormat2(v4, *tree);
+  const std::string v7 = toFormat7(otBytes(*tree), *tree),
+                    v4 = toFormat4(toFormat6(v7, *tree), *tree), v2 = toFormat2(v4, *tree);
   const size_t root = rootOffset(v4, tree->size());
   float root_value;
   std::memcpy(&root_value, &v4[root], 4);

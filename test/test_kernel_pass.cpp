@@ -103,10 +103,15 @@ std::map<KeyTuple, std::vector<double>> directEvaluation(
         for (int dz = -n; dz <= n; ++dz) {
           const octomap::OcTreeKey voxel(centre[0] + dx, centre[1] + dy, centre[2] + dz);
           const octomap::point3d d = p - tree.keyToCoord(voxel);
-          const double distance = config.kernel_distance == "voxel"
-                                      ? distanceToCube(d.x(), d.y(), d.z(), half)
-                                      : std::sqrt(double(d.x()) * d.x() + double(d.y()) * d.y() +
-                                                  double(d.z()) * d.z());
+          // Per axis the gap to the voxel's cube (or centre); z's divided by vertical_support.
+          double gap[3];
+          for (int a = 0; a < 3; ++a) {
+            gap[a] = config.kernel_distance == "voxel" ? std::max(std::fabs(d(a)) - half, 0.0)
+                                                       : std::fabs(d(a));
+          }
+          gap[2] /= config.vertical_support;
+          const double distance =
+              std::sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]);
           const double k = sparseKernel(distance, length, config.sigma0);
           const bool near_edge = distance >= length * 0.999 && distance < length * 1.001;
           if (k <= 0.0 && !near_edge) continue;
@@ -139,11 +144,13 @@ TEST(KernelPass, MapStaysWithinTheTableErrorOfDirectEvaluation) {
   test::SyntheticScene scene;
   const test::SyntheticScan scan = scene.defaultScan();
   for (const std::string& rule : kFusionRuleNames) {
-    for (const std::string distance : {"voxel", "centre", "voxel, class-aware"}) {
+    for (const std::string distance :
+         {"voxel", "centre", "voxel, class-aware", "voxel, vertical", "centre, vertical"}) {
       SemanticConfig config;
       config.rule = rule;
       config.kernel_distance = distance.substr(0, distance.find(','));
       config.class_aware_support = distance.find("class-aware") != std::string::npos;
+      if (distance.find("vertical") != std::string::npos) config.vertical_support = 0.4;
       config.ds_multiplier = 0.0;            // every point, as the direct evaluation
       config.uncertainty_threshold = false;  // likewise
       config.length_scale = 0.45;            // supports of several voxels
@@ -201,6 +208,35 @@ TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
     const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
     EXPECT_EQ(low_pole == kPole, class_aware) << "class-aware " << class_aware << ": label "
                                               << low_pole;
+    EXPECT_EQ(tree.query(octomap::point3d(0.05f, 0.05f, 0.9f)).label, kPole);
+    EXPECT_EQ(tree.query(octomap::point3d(0.45f, 0.05f, 0.02f)).label, kGround);
+  }
+}
+
+// The same pole on the same ground: with a support a third as tall as wide the ground's points
+// no longer reach the pole's voxels above the ground's own, and the ground still fills its
+// own plane.
+TEST(KernelPass, FlatterSupportKeepsGroundEvidenceOffAnUprightObject) {
+  constexpr int kClasses = 3, kGround = 0, kPole = 1;
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  auto add = [&](float x, float y, float z, int label) {
+    points.push_back(x, y, z);
+    for (int c = 0; c < kClasses; ++c) evidence.push_back(c == label ? 20.0f : 0.0f);
+  };
+  for (float x = -1.0f; x <= 1.0f; x += 0.04f)
+    for (float y = -1.0f; y <= 1.0f; y += 0.04f) add(x, y, 0.02f, kGround);
+  for (float z = 0.1f; z <= 1.2f; z += 0.1f) add(0.05f, 0.05f, z, kPole);
+  for (double vertical : {1.0, 1.0 / 3.0}) {
+    SemanticConfig config;
+    config.vertical_support = vertical;
+    config.ds_multiplier = 0.0;
+    config.threads = 2;
+    EvidentialOcTree tree(0.2, kClasses, config);
+    tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
+    const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
+    EXPECT_EQ(low_pole == kPole, vertical < 1.0) << "vertical_support " << vertical << ": label "
+                                                 << low_pole;
     EXPECT_EQ(tree.query(octomap::point3d(0.05f, 0.05f, 0.9f)).label, kPole);
     EXPECT_EQ(tree.query(octomap::point3d(0.45f, 0.05f, 0.02f)).label, kGround);
   }

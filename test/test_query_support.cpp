@@ -84,6 +84,21 @@ TEST_F(QuerySupport, KnownVoxelWithoutEvidenceAnswersTheDiscountedKernelMeanOfIt
   EXPECT_EQ(tree.query(tree.keyToCoord(kCentre)).label, 0);  // the nearer voxel's class
 }
 
+TEST_F(QuerySupport, AFlatterSupportReachesLessFarUp) {
+  // vertical_support 0.25: the voxel two below is 0.3 m / 0.25 = 1.2 m away for the kernel,
+  // beyond the support; the one beside it stays 0.1 m away and answers alone.
+  SemanticConfig config = surfaceOnly();
+  config.vertical_support = 0.25;
+  tree.setConfig(config);
+  ASSERT_GT(0.3 / 0.25, supportLength());
+  const double k_near = sparseKernel(0.1, supportLength(), 1.0);
+  std::vector<float> expected(kClasses);
+  for (int c = 0; c < kClasses; ++c) expected[c] = float(k_near * near_values[c]);
+  float got[kClasses];
+  ASSERT_TRUE(tree.answerPayload(kCentre, got));
+  for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(got[c], expected[c], 1e-5) << c;
+}
+
 TEST_F(QuerySupport, VoxelWithEvidenceAnswersItsOwnOnly) {
   expectOpinionOf(tree, tree.query(tree.keyToCoord(offset(1, 0, 0))), near_values);
   expectOpinionOf(tree, tree.query(tree.keyToCoord(offset(0, 0, -2))), far_values);

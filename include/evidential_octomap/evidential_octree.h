@@ -11,6 +11,7 @@
 #include <octomap/OcTreeNode.h>
 #include <octomap/OccupancyOcTreeBase.h>
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <iosfwd>
@@ -239,7 +240,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // The support answer of a voxel without evidence (query_support.cpp): the support length of a
   // point without uncertainty, the voxels it spans, and the kernel-weighted values.
   double queryLength() const;
-  int querySupportReach() const;
+  std::array<int, 3> querySupportReach() const;  // voxels on x, y, z
   bool supportPayload(const octomap::OcTreeKey& key, float* out) const;
   // Editing: detail/tree_editing.h says what each does.
   EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);

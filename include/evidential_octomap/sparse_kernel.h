@@ -17,6 +17,11 @@ double adaptiveLength(double length_scale, double beta, double gamma, double unc
 // point's offset (dx, dy, dz) from the cube's centre; 0 inside the cube.
 double distanceToCube(double dx, double dy, double dz, double half_size);
 
+// The kernel's distance (SemanticConfig::kernel_distance, vertical_support): the gap on each axis
+// between a point at offset (dx, dy, dz) from a voxel's centre and the voxel's cube of half side
+// `half_size` (0: its centre), the z gap divided by `vertical_support`, then Euclidean.
+double kernelDistance(double dx, double dy, double dz, double half_size, double vertical_support);
+
 // U_thr such that the `drop_percent` % most uncertain values lie above it (O(N), nth_element).
 // Points with u <= U_thr are kept. drop_percent <= 0 keeps everything (+inf is returned).
 // `values` is taken by value because nth_element reorders it.

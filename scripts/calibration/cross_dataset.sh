@@ -15,15 +15,9 @@ scans="${SCANS:-24}"
 mkdir -p "${out}"
 git -C "${root}" rev-parse --short HEAD > "${out}/commit.txt"
 variants="dempster,sbki,ebs,reference_compat"
-generated=(
-  "forest_good --scene forest --sensor os1-64 --seed 21 --network good"
-  "grassland_poor --scene grassland --sensor os1-64 --seed 22 --network poor"
-  "rocky_overconfident_x5 --scene rocky --sensor os1-128 --seed 23 --network overconfident --evidence-scale 5"
-  "farm_underconfident_x0.3 --scene farm --sensor os1-32 --seed 24 --network underconfident --evidence-scale 0.3"
-)
-for spec in "${generated[@]}"; do
-  read -r name args <<<"${spec}"
-  [ -f "${out}/${name}/README.md" ] || "${cli}" generate --scans "${scans}" --out "${out}/${name}" -q ${args}
+source "${root}/scripts/calibration/datasets.sh"
+generated_datasets "${cli}" "${out}" "${scans}"
+for name in "${GENERATED_NAMES[@]}"; do
   "${cli}" compare --data "${out}/${name}" --classes "${out}/${name}/classes.yaml" --no-rellis \
     --sources file --variants "${variants}" --protocols reconstruction,held-out \
     --out "${out}/compare_${name}" --quiet > /dev/null

@@ -23,6 +23,7 @@ KernelPass::KernelPass(const SemanticConfig& config, const EvidentialOcTree& tre
       length_scale_(config.length_scale),
       beta_(config.beta),
       gamma_(config.effectiveGamma()),
+      vertical_support_(config.vertical_support),
       uncertainty_kernel_(tree.rule().usesUncertaintyKernel()),
       to_cube_(config.kernel_distance == "voxel"),
       class_aware_(config.class_aware_support),
@@ -54,8 +55,12 @@ void KernelPass::preparePoints(const SemanticPoints& points, int threads,
         uncertainty_kernel_ ? adaptiveLength(length_scale_, beta_, gamma_, o.uncertainty)
                             : length_scale_);
     kp.inv_length2 = 1.0 / (double(length) * length);
-    // A voxel can take part when its cube (or centre) is within L on every axis.
-    kp.reach = static_cast<int>(std::floor(length / resolution + (to_cube_ ? 1.0 : 0.5))) + 1;
+    // A voxel can take part when its cube (or centre) is within L on x and y, and within
+    // L * vertical_support on z.
+    const double extra = to_cube_ ? 1.0 : 0.5;
+    kp.reach[0] = kp.reach[1] = static_cast<int>(std::floor(length / resolution + extra)) + 1;
+    kp.reach[2] =
+        static_cast<int>(std::floor(length * vertical_support_ / resolution + extra)) + 1;
     kp.key = tree_.coordToKey(points.positions[j]);
   }
 }
@@ -129,19 +134,22 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
   constexpr int kSize = 1 << kSubtreeLevels;
   int lo[3], hi[3];
   for (int a = 0; a < 3; ++a) {
-    lo[a] = std::max(-point.reach, int(base[a]) - int(point.key[a]));
-    hi[a] = std::min(point.reach, int(base[a]) + kSize - 1 - int(point.key[a]));
+    lo[a] = std::max(-point.reach[a], int(base[a]) - int(point.key[a]));
+    hi[a] = std::min(point.reach[a], int(base[a]) + kSize - 1 - int(point.key[a]));
     if (lo[a] > hi[a]) return;
   }
   // d^2 = sum over the axes of a term per axis offset: the gap between the point and the
-  // voxel's cube (or centre) along that axis, squared and divided by L^2.
+  // voxel's cube (or centre) along that axis, squared and divided by L^2 (on z by
+  // (L vertical_support)^2).
   const double half = tree_.getResolution() / 2.0;
-  const double inv_length2 = point.inv_length2;
   std::vector<double>& terms = out->axis_terms;
-  terms.resize(3 * (2 * point.reach + 1));
+  const int stride = 2 * point.reach[0] + 1;  // the widest axis
+  terms.resize(3 * stride);
   double* axis[3];
   for (int a = 0; a < 3; ++a) {
-    axis[a] = &terms[a * (2 * point.reach + 1)] - lo[a];
+    axis[a] = &terms[a * stride] - lo[a];
+    const double inv_length2 =
+        a == 2 ? point.inv_length2 / (vertical_support_ * vertical_support_) : point.inv_length2;
     for (int o = lo[a]; o <= hi[a]; ++o) {
       const float centre =
           static_cast<float>(tree_.keyToCoord(static_cast<octomap::key_type>(point.key[a] + o)));

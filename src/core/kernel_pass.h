@@ -12,6 +12,7 @@
 // the map keeps (KernelRows::mask). Private to the core.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -45,8 +46,8 @@ class KernelTable {
 // A semantic point ready for the kernel.
 struct KernelPoint {
   octomap::OcTreeKey key;    // its voxel
-  double inv_length2 = 0.0;  // 1 / L^2 of its support
-  int reach = 0;             // voxels it may reach: |offset| <= reach on every axis
+  double inv_length2 = 0.0;   // 1 / L^2 of its support (horizontally; vertical_support scales z)
+  std::array<int, 3> reach{};  // voxels it may reach: |offset| <= reach[a] along axis a
   PointOpinion opinion;
 };
 
@@ -103,6 +104,7 @@ class KernelPass {
   const FusionRule& rule_;
   int num_classes_;
   double length_scale_, beta_, gamma_;
+  double vertical_support_;
   bool uncertainty_kernel_;
   bool to_cube_;
   bool class_aware_;

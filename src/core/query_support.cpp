@@ -15,10 +15,12 @@
 
 namespace evidential_octomap {
 
-int EvidentialOcTree::querySupportReach() const {
+std::array<int, 3> EvidentialOcTree::querySupportReach() const {
   const double length = queryLength();
   const double extra = config_.kernel_distance == "voxel" ? 1.0 : 0.5;
-  return static_cast<int>(std::floor(length / resolution + extra));
+  const int across = static_cast<int>(std::floor(length / resolution + extra));
+  const int up = static_cast<int>(std::floor(length * config_.vertical_support / resolution + extra));
+  return {across, across, up};
 }
 
 double EvidentialOcTree::queryLength() const {
@@ -29,20 +31,21 @@ double EvidentialOcTree::queryLength() const {
 }
 
 bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out) const {
-  const int reach = querySupportReach();
+  const std::array<int, 3> reach = querySupportReach();
   const double length = queryLength();
   const double half = config_.kernel_distance == "voxel" ? resolution / 2.0 : 0.0;
+  const double up = config_.vertical_support;
   const float prior = rule_->prior();
   double sum[kMaxClasses] = {};
   double weight_sum = 0.0, nearest = 0.0;
   float values[kMaxClasses];
-  for (int dz = -reach; dz <= reach; ++dz) {
-    for (int dy = -reach; dy <= reach; ++dy) {
-      for (int dx = -reach; dx <= reach; ++dx) {
+  for (int dz = -reach[2]; dz <= reach[2]; ++dz) {
+    for (int dy = -reach[1]; dy <= reach[1]; ++dy) {
+      for (int dx = -reach[0]; dx <= reach[0]; ++dx) {
         if (!dx && !dy && !dz) continue;
         const int x = int(key[0]) + dx, y = int(key[1]) + dy, z = int(key[2]) + dz;
         if (std::min({x, y, z}) < 0 || std::max({x, y, z}) > 0xFFFF) continue;
-        const double d = distanceToCube(dx * resolution, dy * resolution, dz * resolution, half);
+        const double d = kernelDistance(dx * resolution, dy * resolution, dz * resolution, half, up);
         const double k = std::min(1.0, sparseKernel(d, length, config_.sigma0));
         if (!(k > 0.0)) continue;
         const octomap::OcTreeKey neighbour(x, y, z);

@@ -66,8 +66,8 @@ void ScanSubtrees::collectPointSubtrees() {
     const KernelPoint& p = points[j];
     int lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::max(0, int(p.key[a]) - p.reach) >> kSubtreeLevels;
-      hi[a] = std::min(0xFFFF, int(p.key[a]) + p.reach) >> kSubtreeLevels;
+      lo[a] = std::max(0, int(p.key[a]) - p.reach[a]) >> kSubtreeLevels;
+      hi[a] = std::min(0xFFFF, int(p.key[a]) + p.reach[a]) >> kSubtreeLevels;
     }
     for (int x = lo[0]; x <= hi[0]; ++x)
       for (int y = lo[1]; y <= hi[1]; ++y)
@@ -122,8 +122,8 @@ void ScanSubtrees::markReachedBlocks(size_t i, PerThread* t) const {
     int lo[3], hi[3];
     for (int a = 0; a < 3; ++a) {
       const int at = int(point.key[a]) - int(base[a]);
-      lo[a] = std::max(at - point.reach, 0) / kBlockSize;
-      hi[a] = std::min(at + point.reach, kSubtreeSize - 1) / kBlockSize;
+      lo[a] = std::max(at - point.reach[a], 0) / kBlockSize;
+      hi[a] = std::min(at + point.reach[a], kSubtreeSize - 1) / kBlockSize;
     }
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)

@@ -101,6 +101,10 @@ std::vector<Setting> makeList() {
           "Point-to-voxel distance of the kernel: voxel (to the voxel's cube, so a point always "
           "reaches its own voxel) or centre")
         .choices({"voxel", "centre"}),
+    Entry("vertical_support", &MapSettings::vertical_support, kMap,
+          "The kernel support's height as a fraction of its width (map z; 1: a ball; lower keeps "
+          "ground evidence off thin upright objects)")
+        .range({0.0, 1.0, true, false, kNaN, "in (0, 1]"}).reconfigurable(0.05, 1.0),
     Entry("max_range", &MapSettings::max_range, kMap, "Max sensor range [m] (< 0: unlimited)")
         .range({-kInf, kInf, false, false, kNaN, "a number (< 0: unlimited)"})
         .ros("sensor_model/max_range").reconfigurable(-1.0, 500.0),

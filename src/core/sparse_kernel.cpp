@@ -20,9 +20,13 @@ double adaptiveLength(double length_scale, double beta, double gamma, double unc
 }
 
 double distanceToCube(double dx, double dy, double dz, double half_size) {
+  return kernelDistance(dx, dy, dz, half_size, 1.0);
+}
+
+double kernelDistance(double dx, double dy, double dz, double half_size, double vertical_support) {
   const double x = std::max(std::fabs(dx) - half_size, 0.0);
   const double y = std::max(std::fabs(dy) - half_size, 0.0);
-  const double z = std::max(std::fabs(dz) - half_size, 0.0);
+  const double z = std::max(std::fabs(dz) - half_size, 0.0) / vertical_support;
   return std::sqrt(x * x + y * y + z * z);
 }
 

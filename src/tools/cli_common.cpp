@@ -120,6 +120,8 @@ std::string variantName(const SemanticConfig& c) {
     if (c.evidence_cap == 0.0) v += " w/o evidence cap";
     if (c.kernel_distance != SemanticConfig().kernel_distance)
       v += " kernel distance " + c.kernel_distance;
+    if (c.vertical_support != SemanticConfig().vertical_support)
+      v += " vertical support " + std::to_string(c.vertical_support).substr(0, 4);
     if (c.downsampling != SemanticConfig().downsampling && !c.reference_compat)
       v += " " + c.downsampling;
   }

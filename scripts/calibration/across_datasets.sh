@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Candidate settings of the default scored on every dataset of the cross-dataset table (the same
+# datasets, generated as scripts/calibration/datasets.sh says, and the same queries), with the
+# leave-one-dataset-out choice among them; writes docs/PAGE.
+#   bash scripts/calibration/across_datasets.sh VARIANTS PAGE TITLE [OUT_DIR]   (SCANS=24)
+#   e.g. VARIANTS=dempster,dempster:vertical_support=0.75,dempster:vertical_support=0.5
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+variants="$1"
+page="$2"
+title="$3"
+out="${4:-${root}/out/across_datasets}"
+cli="${CLI:-${root}/build/core/src/tools/evidential_octomap}"
+scans="${SCANS:-24}"
+mkdir -p "${out}"
+source "${root}/scripts/calibration/datasets.sh"
+generated_datasets "${cli}" "${out}" "${scans}"
+for name in "${GENERATED_NAMES[@]}"; do
+  "${cli}" compare --data "${out}/${name}" --classes "${out}/${name}/classes.yaml" --no-rellis \
+    --sources file --variants "${variants}" --protocols reconstruction,held-out \
+    --out "${out}/compare_${name}" --quiet > /dev/null
+done
+"${cli}" compare --data "${root}/data/semantickitti_08_first10" \
+  --classes "${root}/config/classes_semantickitti.yaml" --sources learned,onehot \
+  --variants "${variants}" --protocols reconstruction,held-out --out "${out}/compare_bundled" \
+  --quiet > /dev/null
+/usr/bin/python3 "${root}/scripts/calibration/across_datasets.py" "${out}" "${root}/docs/${page}" \
+  "${title}" "SCANS=${scans} bash scripts/calibration/across_datasets.sh ${variants} ${page} ..."
