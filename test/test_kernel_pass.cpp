@@ -184,26 +184,30 @@ TEST(KernelPass, MapStaysWithinTheTableErrorOfDirectEvaluation) {
   }
 }
 
-// A pole of a few points standing on a dense ground of another class: with the class-aware
-// support the pole's voxels near the ground keep the pole's class, without it the ground's many
-// points outvote it; the ground itself keeps its class either way.
-TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
-  constexpr int kClasses = 3, kGround = 0, kPole = 1;
-  octomap::Pointcloud points;
-  std::vector<float> evidence;
+// A pole of a few points (class kPole) standing on a dense ground (class kGround).
+constexpr int kPoleClasses = 3, kGround = 0, kPole = 1;
+void poleOnGround(octomap::Pointcloud* points, std::vector<float>* evidence) {
   auto add = [&](float x, float y, float z, int label) {
-    points.push_back(x, y, z);
-    for (int c = 0; c < kClasses; ++c) evidence.push_back(c == label ? 20.0f : 0.0f);
+    points->push_back(x, y, z);
+    for (int c = 0; c < kPoleClasses; ++c) evidence->push_back(c == label ? 20.0f : 0.0f);
   };
   for (float x = -1.0f; x <= 1.0f; x += 0.04f)
     for (float y = -1.0f; y <= 1.0f; y += 0.04f) add(x, y, 0.02f, kGround);
   for (float z = 0.1f; z <= 1.2f; z += 0.1f) add(0.05f, 0.05f, z, kPole);
+}
+
+// With the class-aware support the pole's voxels near the ground keep the pole's class, without
+// it the ground's many points outvote it; the ground itself keeps its class either way.
+TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  poleOnGround(&points, &evidence);
   for (bool class_aware : {false, true}) {
     SemanticConfig config;
     config.class_aware_support = class_aware;
     config.ds_multiplier = 0.0;  // the count cap would keep a 2x2x2 block's first points only
     config.threads = 2;
-    EvidentialOcTree tree(0.2, kClasses, config);
+    EvidentialOcTree tree(0.2, kPoleClasses, config);
     tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
     const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
     EXPECT_EQ(low_pole == kPole, class_aware) << "class-aware " << class_aware << ": label "
@@ -217,22 +221,15 @@ TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
 // no longer reach the pole's voxels above the ground's own, and the ground still fills its
 // own plane.
 TEST(KernelPass, FlatterSupportKeepsGroundEvidenceOffAnUprightObject) {
-  constexpr int kClasses = 3, kGround = 0, kPole = 1;
   octomap::Pointcloud points;
   std::vector<float> evidence;
-  auto add = [&](float x, float y, float z, int label) {
-    points.push_back(x, y, z);
-    for (int c = 0; c < kClasses; ++c) evidence.push_back(c == label ? 20.0f : 0.0f);
-  };
-  for (float x = -1.0f; x <= 1.0f; x += 0.04f)
-    for (float y = -1.0f; y <= 1.0f; y += 0.04f) add(x, y, 0.02f, kGround);
-  for (float z = 0.1f; z <= 1.2f; z += 0.1f) add(0.05f, 0.05f, z, kPole);
+  poleOnGround(&points, &evidence);
   for (double vertical : {1.0, 1.0 / 3.0}) {
     SemanticConfig config;
     config.vertical_support = vertical;
     config.ds_multiplier = 0.0;
     config.threads = 2;
-    EvidentialOcTree tree(0.2, kClasses, config);
+    EvidentialOcTree tree(0.2, kPoleClasses, config);
     tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
     const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
     EXPECT_EQ(low_pole == kPole, vertical < 1.0) << "vertical_support " << vertical << ": label "

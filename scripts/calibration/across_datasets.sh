@@ -15,14 +15,6 @@ scans="${SCANS:-24}"
 mkdir -p "${out}"
 source "${root}/scripts/calibration/datasets.sh"
 generated_datasets "${cli}" "${out}" "${scans}"
-for name in "${GENERATED_NAMES[@]}"; do
-  "${cli}" compare --data "${out}/${name}" --classes "${out}/${name}/classes.yaml" --no-rellis \
-    --sources file --variants "${variants}" --protocols reconstruction,held-out \
-    --out "${out}/compare_${name}" --quiet > /dev/null
-done
-"${cli}" compare --data "${root}/data/semantickitti_08_first10" \
-  --classes "${root}/config/classes_semantickitti.yaml" --sources learned,onehot \
-  --variants "${variants}" --protocols reconstruction,held-out --out "${out}/compare_bundled" \
-  --quiet > /dev/null
+compare_every_dataset "${cli}" "${out}" "${variants}" "${root}"
 /usr/bin/python3 "${root}/scripts/calibration/across_datasets.py" "${out}" "${root}/docs/${page}" \
   "${title}" "SCANS=${scans} bash scripts/calibration/across_datasets.sh ${variants} ${page} ..."

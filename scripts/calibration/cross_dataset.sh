@@ -17,15 +17,7 @@ git -C "${root}" rev-parse --short HEAD > "${out}/commit.txt"
 variants="dempster,sbki,ebs,reference_compat"
 source "${root}/scripts/calibration/datasets.sh"
 generated_datasets "${cli}" "${out}" "${scans}"
-for name in "${GENERATED_NAMES[@]}"; do
-  "${cli}" compare --data "${out}/${name}" --classes "${out}/${name}/classes.yaml" --no-rellis \
-    --sources file --variants "${variants}" --protocols reconstruction,held-out \
-    --out "${out}/compare_${name}" --quiet > /dev/null
-done
-"${cli}" compare --data "${root}/data/semantickitti_08_first10" \
-  --classes "${root}/config/classes_semantickitti.yaml" --sources learned,onehot \
-  --variants "${variants}" --protocols reconstruction,held-out --out "${out}/compare_bundled" \
-  --quiet > /dev/null
+compare_every_dataset "${cli}" "${out}" "${variants}" "${root}"
 /usr/bin/python3 "${root}/scripts/calibration/summarize.py" "${out}" \
   "${root}/docs/calibration_tables.md" "${root}/docs/images/reliability_cross_dataset.png" \
   "${root}/docs/results.md"
