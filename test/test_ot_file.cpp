@@ -596,7 +596,8 @@ TEST(ColorExport, ClassColoursSurviveAbstractOcTreeRead) {
 
 // Each leaf's colour is uncertaintyColor of the value the mode names, computed here from the
 // leaf's opinion: P(label wrong) = 1 - max p over [0, 1 - 1/C], or the vacuity u over [0, 1].
-static void expectColoursOf(ColorMode mode, const std::function<double(const VoxelOpinion&)>& value) {
+static void expectColoursOf(ColorMode mode,
+                            const std::function<double(const VoxelOpinion&)>& value) {
   const auto tree = makeMap("dempster");
   const auto color = toColorOcTree(*tree, threeClasses(), mode);
   size_t checked = 0;

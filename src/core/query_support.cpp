@@ -19,7 +19,8 @@ std::array<int, 3> EvidentialOcTree::querySupportReach() const {
   const double length = queryLength();
   const double extra = config_.kernel_distance == "voxel" ? 1.0 : 0.5;
   const int across = static_cast<int>(std::floor(length / resolution + extra));
-  const int up = static_cast<int>(std::floor(length * config_.vertical_support / resolution + extra));
+  const int up =
+      static_cast<int>(std::floor(length * config_.vertical_support / resolution + extra));
   return {across, across, up};
 }
 
@@ -45,7 +46,8 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out)
         if (!dx && !dy && !dz) continue;
         const int x = int(key[0]) + dx, y = int(key[1]) + dy, z = int(key[2]) + dz;
         if (std::min({x, y, z}) < 0 || std::max({x, y, z}) > 0xFFFF) continue;
-        const double d = kernelDistance(dx * resolution, dy * resolution, dz * resolution, half, up);
+        const double d =
+            kernelDistance(dx * resolution, dy * resolution, dz * resolution, half, up);
         const double k = std::min(1.0, sparseKernel(d, length, config_.sigma0));
         if (!(k > 0.0)) continue;
         const octomap::OcTreeKey neighbour(x, y, z);

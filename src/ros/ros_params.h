@@ -60,7 +60,8 @@ struct NodeConfig {
   std::string base_frame_id;         // frame of pointcloud_min_z/max_z ("" = frame_id)
   HeightBand pointcloud_band;        // pointcloud_min_z/max_z: input points kept [m]
   HeightBand occupancy_band;         // occupancy_min_z/max_z: leaves in views and 2-D maps [m]
-  std::string full_map_colors = "class";  // octomap_full's ColorOcTree: class | uncertainty | vacuity
+  // octomap_full's ColorOcTree colours: class | uncertainty | vacuity
+  std::string full_map_colors = "class";
   // projected_cost_map: cost 0..100 per class name; classes left out cost class_cost_default.
   std::vector<std::pair<std::string, int>> class_costs;
   int class_cost_default = 100;

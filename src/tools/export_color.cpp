@@ -1,5 +1,5 @@
-// `evidential_octomap export`: ColorOcTree (class, uncertainty or vacuity colours) for octovis and other
-// stock OctoMap tools, and the occupancy-only .bt.
+// `evidential_octomap export`: ColorOcTree (class, uncertainty or vacuity colours) for octovis
+// and other stock OctoMap tools, and the occupancy-only .bt.
 #include <cmath>
 #include <iostream>
 #include <memory>
