@@ -8,9 +8,9 @@ compare.json files that scripts/calibration/cross_dataset.sh writes.
 Targets checked for the default rule (dempster) on every dataset, protocol and evidence source:
 ECE <= 0.05; no rule with a Brier score lower beyond its paired-bootstrap interval; AUROC of the
 default uncertainty (1 - max p) for the voxel's label being wrong >= 0.80 and >= the input's
-per-point AUROC of its u (where the input has a per-point u); mIoU over all queries within the interval of the best rule; in reconstruction (the
-map queried at the points it was built from, so the input's IoU is comparable) no class with
->= 1000 GT queries below the input's IoU.
+per-point AUROC of its u (where the input has a per-point u); mIoU over all queries within the
+interval of the best rule; in reconstruction (the map queried at the points it was built from,
+so the input's IoU is comparable) no class with >= 1000 GT queries below the input's IoU.
 """
 import datetime
 import glob

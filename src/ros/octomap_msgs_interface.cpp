@@ -57,7 +57,7 @@ class OctomapMsgsOutputs : public OctomapMsgsInterface {
  private:
   octomap_msgs::Octomap full(const EvidentialOcTree& tree, const ClassTable& classes) const {
     return toOctomapFull(
-        tree, classes, colorModeFromName(config_.full_map_colors), config_.frame_id);
+        tree, classes, config_.full_map_colors, config_.frame_id);
   }
 
   bool binaryService(octomap_msgs::GetOctomap::Request&, octomap_msgs::GetOctomap::Response& res) {

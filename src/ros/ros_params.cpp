@@ -77,7 +77,13 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   nh.param("pointcloud_max_z", c.pointcloud_band.max_z, c.pointcloud_band.max_z);
   nh.param("occupancy_min_z", c.occupancy_band.min_z, c.occupancy_band.min_z);
   nh.param("occupancy_max_z", c.occupancy_band.max_z, c.occupancy_band.max_z);
-  nh.param("full_map_colors", c.full_map_colors, c.full_map_colors);
+  std::string colors = "class";
+  nh.param("full_map_colors", colors, colors);
+  try {
+    c.full_map_colors = colorModeFromName(colors);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("~full_map_colors: ") + e.what());
+  }
   readClassCosts(nh, &c);
   nh.param("use_camera", c.use_camera, c.use_camera);
   nh.param("camera/input", c.camera_input, c.camera_input);
@@ -90,11 +96,6 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
     throw std::invalid_argument("~pointcloud_min_z must be < ~pointcloud_max_z");
   if (!(c.occupancy_band.min_z < c.occupancy_band.max_z))
     throw std::invalid_argument("~occupancy_min_z must be < ~occupancy_max_z");
-  try {
-    colorModeFromName(c.full_map_colors);
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string("~full_map_colors: ") + e.what());
-  }
   if (c.insert_queue_size < 1) throw std::invalid_argument("~insert_queue_size must be >= 1");
   if (!(c.probability_evidence >= 0.0))
     throw std::invalid_argument("~probability_evidence must be >= 0");

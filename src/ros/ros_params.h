@@ -14,6 +14,7 @@
 #include "conversions.h"
 #include "evidential_octomap/MappingConfig.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/io.h"
 #include "evidential_octomap/semantic_config.h"
 #include "visualization.h"
 
@@ -60,8 +61,7 @@ struct NodeConfig {
   std::string base_frame_id;         // frame of pointcloud_min_z/max_z ("" = frame_id)
   HeightBand pointcloud_band;        // pointcloud_min_z/max_z: input points kept [m]
   HeightBand occupancy_band;         // occupancy_min_z/max_z: leaves in views and 2-D maps [m]
-  // octomap_full's ColorOcTree colours: class | uncertainty | vacuity
-  std::string full_map_colors = "class";
+  ColorMode full_map_colors = ColorMode::kClass;  // octomap_full's ColorOcTree colours
   // projected_cost_map: cost 0..100 per class name; classes left out cost class_cost_default.
   std::vector<std::pair<std::string, int>> class_costs;
   int class_cost_default = 100;
