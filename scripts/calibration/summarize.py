@@ -73,12 +73,9 @@ def thin_classes(run):
 
 
 def majority_note(run, c):
-    """The voxel majority of the hard predictions (no kernel) for a class, when it too is below
-    the input: then the voxel size, not the kernel, bounds that class. Only where the input's
-    labels are those predictions (learned evidence has labels of its own)."""
+    """The voxel majority of the input's own labels (no kernel) for a class, when it too is below
+    the input: then the voxel size, not the kernel, bounds that class."""
     m = c.get("voxel_majority_iou")
-    if run["evidence_source"] == "learned":
-        return ""
     if m is None or m >= c["input_iou"]:
         return ""
     return " (voxel majority %.1f)" % (100 * m)

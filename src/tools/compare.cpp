@@ -238,6 +238,7 @@ class SectionRun {
     scored.push_back({"input " + source + " evidence, per point", bootstrap_.scores(outcomes)});
     sec_.rows.push_back("| " + source + " | " + inputDescription(ev) + " | | |" +
                         qualityCells(input, NAN, NAN) + " – | – | – |");
+    addSourceMajorityRow(source, evidence, &scored);
     sec_.detection_rows.push_back("| " + source + " | " + inputDescription(ev) + " | | |" +
                                   detectionCells(input));
     const std::vector<octomap::OcTreeKey> endpoints =
@@ -246,6 +247,26 @@ class SectionRun {
       scored.push_back(runVariant(source, ev, evidence, input, endpoints, v, out));
     }
     addBootstrapRows(source, scored, bootstrap_, context_, &sec_, &out->bootstrap);
+  }
+
+  // The voxel majority of the source's own per-point labels (the argmax of its evidence), the
+  // bound that resolution sets on "no class below the input's IoU" for this source. A row of its
+  // own only where those labels are not the predictions (learned evidence, a network's).
+  void addSourceMajorityRow(const std::string& source,
+                            const std::vector<std::vector<float>>& evidence,
+                            std::vector<ScoredRow>* scored) {
+    const std::vector<std::vector<int>> labels = evidenceLabels(evidence, classes_.numClasses());
+    source_majority_iou_ = majority_iou_;
+    if (std::all_of(protocol_.map_scans.begin(), protocol_.map_scans.end(),
+                    [&](size_t s) { return labels[s] == scans_[s].predicted; }))
+      return;
+    ScoredRow row = referenceRow(
+        voxelMajorityAnswers(scans_, labels, protocol_.map_scans, queries_, o_.resolution,
+                             classes_.numClasses(), classes_.ignore_class),
+        "voxel majority of the mapped points' " + source + " labels (argmax of the evidence)",
+        classes_, bootstrap_, &sec_);
+    source_majority_iou_ = row.iou;
+    scored->push_back(std::move(row));
   }
 
   // One map: its report (JSON), its table rows, its block scores for the bootstrap.
@@ -272,10 +293,10 @@ class SectionRun {
     sec_.rows.push_back(row.str());
     sec_.detection_rows.push_back(lead + detectionCells(r.map.quality));
     nlohmann::json j = toJson(r, classes_);
-    // What a voxel map of the network's own hard labels reaches, without any kernel: the bound
-    // that resolution sets on "no class below the input's IoU".
+    // What a voxel map of the input's own labels reaches, without any kernel: the bound that
+    // resolution sets on "no class below the input's IoU".
     for (auto& c : j["per_class"]) {
-      const double iou = majority_iou_[c["class"].get<int>()];
+      const double iou = source_majority_iou_[c["class"].get<int>()];
       c["voxel_majority_iou"] = std::isfinite(iou) ? nlohmann::json(iou) : nlohmann::json(nullptr);
     }
     j["dataset_label"] = data_.label;
@@ -318,6 +339,7 @@ class SectionRun {
   Section sec_;
   std::vector<ScoredRow> shared_rows_;
   std::vector<double> majority_iou_;  // per class, the voxel majority of the predictions
+  std::vector<double> source_majority_iou_;  // ... of the labels of the source at hand
 };
 
 // The RELLIS-3D scan and class table: given, else guessed beside --data and --classes.

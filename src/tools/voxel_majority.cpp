@@ -14,18 +14,19 @@ namespace {
 using VoxelCounts =
     std::unordered_map<octomap::OcTreeKey, std::vector<uint32_t>, octomap::OcTreeKey::KeyHash>;
 
-// Per voxel, how many mapped points carry each class (`labels` of each scan; ignore class and
-// out-of-range labels not counted).
-VoxelCounts countLabels(const std::vector<Scan>& scans, const std::vector<size_t>& map_scans,
-                        const octomap::OcTree& keys_of, int num_classes, int ignore_class,
-                        MajorityOf what) {
+// Per voxel, how many mapped points carry each class (`labels[s]` of each mapped scan s; ignore
+// class and out-of-range labels not counted).
+VoxelCounts countLabels(const std::vector<Scan>& scans,
+                        const std::vector<const std::vector<int>*>& labels,
+                        const std::vector<size_t>& map_scans, const octomap::OcTree& keys_of,
+                        int num_classes, int ignore_class) {
   VoxelCounts counts;
   for (size_t s : map_scans) {
     const Scan& scan = scans.at(s);
-    const std::vector<int>& labels = what == MajorityOf::kPredictions ? scan.predicted : scan.gt;
-    if (labels.size() != scan.size()) continue;
+    const std::vector<int>& scan_labels = *labels.at(s);
+    if (scan_labels.size() != scan.size()) continue;
     for (size_t i = 0; i < scan.size(); ++i) {
-      const int c = labels[i];
+      const int c = scan_labels[i];
       if (c < 0 || c >= num_classes || c == ignore_class) continue;
       const Eigen::Vector3f p = scan.pointW(i);
       octomap::OcTreeKey key;
@@ -37,15 +38,22 @@ VoxelCounts countLabels(const std::vector<Scan>& scans, const std::vector<size_t
   }
   return counts;
 }
-}  // namespace
 
-std::vector<Query> voxelMajorityAnswers(const std::vector<Scan>& scans,
-                                        const std::vector<size_t>& map_scans,
-                                        const std::vector<Query>& queries, double resolution,
-                                        int num_classes, int ignore_class, MajorityOf what) {
+std::vector<const std::vector<int>*> labelsOf(const std::vector<Scan>& scans, MajorityOf what) {
+  std::vector<const std::vector<int>*> labels;
+  for (const Scan& scan : scans)
+    labels.push_back(what == MajorityOf::kPredictions ? &scan.predicted : &scan.gt);
+  return labels;
+}
+
+std::vector<Query> majorityAnswers(const std::vector<Scan>& scans,
+                                   const std::vector<const std::vector<int>*>& labels,
+                                   const std::vector<size_t>& map_scans,
+                                   const std::vector<Query>& queries, double resolution,
+                                   int num_classes, int ignore_class) {
   const octomap::OcTree keys_of(resolution);  // only for coordToKeyChecked
   const VoxelCounts counts =
-      countLabels(scans, map_scans, keys_of, num_classes, ignore_class, what);
+      countLabels(scans, labels, map_scans, keys_of, num_classes, ignore_class);
   std::vector<Query> answered = queries;
   for (Query& q : answered) {
     q.predicted = -1;
@@ -57,14 +65,49 @@ std::vector<Query> voxelMajorityAnswers(const std::vector<Scan>& scans,
   }
   return answered;
 }
+}  // namespace
+
+std::vector<Query> voxelMajorityAnswers(const std::vector<Scan>& scans,
+                                        const std::vector<size_t>& map_scans,
+                                        const std::vector<Query>& queries, double resolution,
+                                        int num_classes, int ignore_class, MajorityOf what) {
+  return majorityAnswers(scans, labelsOf(scans, what), map_scans, queries, resolution,
+                         num_classes, ignore_class);
+}
+
+std::vector<Query> voxelMajorityAnswers(const std::vector<Scan>& scans,
+                                        const std::vector<std::vector<int>>& labels,
+                                        const std::vector<size_t>& map_scans,
+                                        const std::vector<Query>& queries, double resolution,
+                                        int num_classes, int ignore_class) {
+  std::vector<const std::vector<int>*> pointers;
+  for (const std::vector<int>& l : labels) pointers.push_back(&l);
+  return majorityAnswers(scans, pointers, map_scans, queries, resolution, num_classes,
+                         ignore_class);
+}
+
+std::vector<std::vector<int>> evidenceLabels(const std::vector<std::vector<float>>& evidence,
+                                             int num_classes) {
+  std::vector<std::vector<int>> labels(evidence.size());
+  for (size_t s = 0; s < evidence.size(); ++s) {
+    const size_t n = evidence[s].size() / size_t(num_classes);
+    labels[s].assign(n, -1);
+    for (size_t i = 0; i < n; ++i) {
+      const float* e = &evidence[s][i * num_classes];
+      const float* best = std::max_element(e, e + num_classes);
+      if (*best > 0.0f) labels[s][i] = int(best - e);
+    }
+  }
+  return labels;
+}
 
 std::vector<Query> neighbourhoodOracleAnswers(const std::vector<Scan>& scans,
                                               const std::vector<size_t>& map_scans,
                                               const std::vector<Query>& queries, double resolution,
                                               double support, int num_classes, int ignore_class) {
   const octomap::OcTree keys_of(resolution);
-  const VoxelCounts counts =
-      countLabels(scans, map_scans, keys_of, num_classes, ignore_class, MajorityOf::kPredictions);
+  const VoxelCounts counts = countLabels(scans, labelsOf(scans, MajorityOf::kPredictions),
+                                         map_scans, keys_of, num_classes, ignore_class);
   // Neighbour voxels whose cube lies within `support` of the query voxel's cube. A mapped point's
   // distance to the query voxel is at least that cube-to-cube gap, so this takes in every point
   // a kernel of that support could bring (and some more: the bound stays an upper bound).

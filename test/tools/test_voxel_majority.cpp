@@ -68,6 +68,32 @@ TEST(VoxelMajority, MajorityOfTheMappedPointsInTheQuerysVoxel) {
             2);
 }
 
+TEST(VoxelMajority, LabelsOfAnEvidenceSourceAreTheArgmaxOfEachPointsEvidence) {
+  // Three points in voxel A = [0, 0.2)^3 whose predictions say 1, 1, 2 but whose evidence says
+  // 2 (0.5 < 3), 2 and 1: by the evidence's labels A is class 2, by the predictions class 1.
+  // A fourth point (voxel B) has no evidence at all: label -1, not counted -> B has no label.
+  // Ties go to the lowest class: evidence (0, 4, 4, 0) is class 1.
+  const std::vector<Scan> scans = {makeScan(
+      {{0.05f, 0.05f, 0.05f}, {0.1f, 0.1f, 0.1f}, {0.15f, 0.1f, 0.1f}, {0.3f, 0.1f, 0.1f}},
+      {2, 2, 2, 1}, {1, 1, 2, 1})};
+  const std::vector<std::vector<float>> evidence = {
+      {0, 0.5f, 3, 0, /**/ 0, 0, 1, 0, /**/ 0, 2, 0, 0, /**/ 0, 0, 0, 0}};
+  const std::vector<std::vector<int>> labels = evidenceLabels(evidence, kClasses);
+  ASSERT_EQ(labels.size(), 1u);
+  EXPECT_EQ(labels[0], (std::vector<int>{2, 2, 1, -1}));
+  EXPECT_EQ(evidenceLabels({{0, 4, 4, 0}}, kClasses)[0], std::vector<int>{1});
+  const std::vector<Query> queries = {queryAt(0.01f, 0.02f, 0.03f, 2),
+                                      queryAt(0.3f, 0.1f, 0.1f, 1)};
+  const std::vector<Query> by_evidence =
+      voxelMajorityAnswers(scans, labels, {0}, queries, kResolution, kClasses, 0);
+  EXPECT_EQ(by_evidence[0].predicted, 2);
+  EXPECT_EQ(by_evidence[1].predicted, -1);
+  const std::vector<Query> by_predictions =
+      voxelMajorityAnswers(scans, {0}, queries, kResolution, kClasses, 0, MajorityOf::kPredictions);
+  EXPECT_EQ(by_predictions[0].predicted, 1);
+  EXPECT_EQ(by_predictions[1].predicted, 1);
+}
+
 TEST(NeighbourhoodOracle, GtWhenAnyPredictionWithinTheSupportHasIt) {
   // Mapped predictions: voxel (0,0,0) class 1 twice; voxel 3 voxels away in x (gap 0.4 m)
   // class 2 once. Query in voxel (0,0,0) with GT 2: with support 0.5 m class 2 is within
