@@ -294,6 +294,11 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   size_t applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
                             const VoxelUpdate* begin, const VoxelUpdate* end,
                             const UpdateBatch& batch, Edit& edit);
+  // The last level of the recursion: the leaves of `node`, one update each, in a loop.
+  size_t applyLeafUpdates(EvidentialOcTreeNode* node, const VoxelUpdate* begin,
+                          const VoxelUpdate* end, const UpdateBatch& batch, Edit& edit);
+  size_t updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdate& update,
+                    const UpdateBatch& batch, Edit& edit);
   void keepDropped(const VoxelUpdate* begin, const VoxelUpdate* end,
                    const UpdateBatch& batch) const;
   // The data section's bytes with their running CRC-32 (ot_format.cpp).

@@ -26,7 +26,7 @@ constexpr uint32_t kSlotBatch = 256;
 // rather than one step per item at every level.
 template <typename Item>
 const Item* endOfChildRun(const Item* first, const Item* end, int level, unsigned child) {
-  auto inRun = [&](const Item* u) { return octomap::computeChildIdx(u->key, level) == child; };
+  auto inRun = [&](const Item* u) { return childIndex(u->key, level) == child; };
   const Item* in = first;  // known to be in the run
   size_t step = 1;
   const Item* out = end;  // known to be past the run (or end)
@@ -222,7 +222,7 @@ void EvidentialOcTree::applyTopRecurs(EvidentialOcTreeNode* node, unsigned depth
   }
   const int level = static_cast<int>(tree_depth - 1 - depth);
   for (const SubtreeSeed* first = begin; first != end;) {
-    const unsigned child = octomap::computeChildIdx(first->key, level);
+    const unsigned child = childIndex(first->key, level);
     const SubtreeSeed* last = endOfChildRun(first, end, level, child);
     bool created = false;
     if (!nodeChildExists(node, child) &&
@@ -260,22 +260,7 @@ void EvidentialOcTree::keepDropped(const VoxelUpdate* begin, const VoxelUpdate* 
 size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
                                             const VoxelUpdate* begin, const VoxelUpdate* end,
                                             const UpdateBatch& batch, Edit& edit) {
-  if (depth == tree_depth) {  // one voxel, one merged update
-    if (begin->occupancy != 0) {
-      updateNodeLogOdds(node, begin->occupancy > 0 ? prob_hit_log : prob_miss_log);
-    }
-    const bool cleared = begin->occupancy < 0 && discountsClearings();
-    if (begin->increments == VoxelUpdate::kNoIncrements) {
-      if (cleared) discountClearedLeaf(node, edit);
-      return 0;
-    }
-    float values[kMaxClasses];
-    leafValues(node, values);
-    rule_->add(values, batch.rows + size_t(begin->increments) * num_classes_, num_classes_);
-    storeLeafValues(node, values, edit);
-    if (cleared) discountClearedLeaf(node, edit);  // this scan's kernel evidence too
-    return 1;
-  }
+  if (depth == tree_depth) return updateLeaf(node, *begin, batch, edit);
   if (!is_new && !nodeHasChildren(node)) {
     // A pruned block: misses on a block at the lower clamp, or hits on one at the upper clamp,
     // change nothing (OctoMap's early abort); anything else splits it.
@@ -289,10 +274,11 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
     if (unchanged) return 0;
     expandLeaf(node, edit);
   }
+  if (depth + 1 == tree_depth) return applyLeafUpdates(node, begin, end, batch, edit);
   const int level = static_cast<int>(tree_depth - 1 - depth);
   size_t changed = 0;
   for (const VoxelUpdate* first = begin; first != end;) {
-    const unsigned child = octomap::computeChildIdx(first->key, level);
+    const unsigned child = childIndex(first->key, level);
     const VoxelUpdate* last = endOfChildRun(first, end, level, child);
     bool created = false;
     if (!nodeChildExists(node, child) &&
@@ -311,6 +297,47 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
   }
   if (nodeHasChildren(node)) updateInnerNode(node, edit);
   return changed;
+}
+
+size_t EvidentialOcTree::applyLeafUpdates(EvidentialOcTreeNode* node, const VoxelUpdate* begin,
+                                          const VoxelUpdate* end, const UpdateBatch& batch,
+                                          Edit& edit) {
+  size_t changed = 0;
+  for (const VoxelUpdate* u = begin; u != end;) {  // merged per voxel, in child order
+    const unsigned child = childIndex(u->key, 0);
+    const VoxelUpdate* next = u + 1;
+    while (next != end && childIndex(next->key, 0) == child) ++next;  // (none when merged)
+    if (!nodeChildExists(node, child)) {
+      if (!batch.create_semantic_leaves && u->occupancy == 0) {
+        keepDropped(u, next, batch);  // rows for a voxel the map does not have
+        u = next;
+        continue;
+      }
+      createChild(node, child, edit);
+    }
+    changed += updateLeaf(getNodeChild(node, child), *u, batch, edit);
+    u = next;
+  }
+  if (nodeHasChildren(node)) updateInnerNode(node, edit);
+  return changed;
+}
+
+size_t EvidentialOcTree::updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdate& update,
+                                    const UpdateBatch& batch, Edit& edit) {
+  if (update.occupancy != 0) {
+    updateNodeLogOdds(leaf, update.occupancy > 0 ? prob_hit_log : prob_miss_log);
+  }
+  const bool cleared = update.occupancy < 0 && discountsClearings();
+  if (update.increments == VoxelUpdate::kNoIncrements) {
+    if (cleared) discountClearedLeaf(leaf, edit);
+    return 0;
+  }
+  float values[kMaxClasses];
+  leafValues(leaf, values);
+  rule_->add(values, batch.rows + size_t(update.increments) * num_classes_, num_classes_);
+  storeLeafValues(leaf, values, edit);
+  if (cleared) discountClearedLeaf(leaf, edit);  // this scan's kernel evidence too
+  return 1;
 }
 
 }  // namespace evidential_octomap

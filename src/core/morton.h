@@ -25,6 +25,12 @@ inline uint64_t mortonCode(const octomap::OcTreeKey& k) {
   return spreadBits3(k[2]) << 2 | spreadBits3(k[1]) << 1 | spreadBits3(k[0]);
 }
 
+// octomap::computeChildIdx without its branches (a key's bits are as good as random to a
+// branch predictor): bit `level` of x, y and z as the child index 0..7.
+inline unsigned childIndex(const octomap::OcTreeKey& k, int level) {
+  return ((k[0] >> level) & 1u) | ((k[1] >> level) & 1u) << 1 | ((k[2] >> level) & 1u) << 2;
+}
+
 // Inverse of spreadBits3: every third bit of v, packed.
 inline uint64_t compactBits3(uint64_t v) {
   v &= 0x249249249249ull;
