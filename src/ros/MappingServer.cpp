@@ -283,7 +283,10 @@ void MappingServer::imageCallback(const sensor_msgs::ImageConstPtr& image,
 // --- insertion thread ---------------------------------------------------------------------
 
 void MappingServer::insertionLoop() {
-  while (std::optional<PendingCloud> pending = clouds_->pop()) {
+  for (;;) {
+    recordMapSizeWhenIdle();
+    std::optional<PendingCloud> pending = clouds_->pop();
+    if (!pending) break;
     try {
       insertCloud(*pending);
     } catch (const std::exception& e) {  // never let one cloud end the thread
@@ -468,15 +471,37 @@ void MappingServer::publishMap(bool force) {
 }
 
 void MappingServer::recordMapSizeAfterInsert() {
-  if (clouds_->size() == 0 || msSince(map_size_recorded_) >= 1000.0) recordMapSize();
+  // Walks take at most 2 % of the time; with clouds waiting, at most one a second too.
+  const double walks_apart = 50.0 * map_size_walk_ms_;
+  if (msSince(map_size_recorded_) >=
+      (clouds_->size() == 0 ? walks_apart : std::max(1000.0, walks_apart))) {
+    recordMapSize();
+  } else {
+    map_size_stale_ = true;
+  }
+}
+
+// Before waiting for the next cloud: when none comes for a moment and inserts went unrecorded.
+void MappingServer::recordMapSizeWhenIdle() {
+  if (!map_size_stale_ || clouds_->waitFor(std::chrono::milliseconds(300))) return;
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!map_size_stale_) return;  // a service recorded it meanwhile
+  recordMapSize();
+  publishStatus();
 }
 
 void MappingServer::recordMapSize() {
+  const auto t0 = std::chrono::steady_clock::now();
+  const size_t leaves = tree_->getNumLeafNodes();
+  const size_t semantic = tree_->numSemanticNodes();
+  const size_t bytes = tree_->memoryUsage();
+  map_size_walk_ms_ = msSince(t0);
   map_size_recorded_ = std::chrono::steady_clock::now();
+  map_size_stale_ = false;
   std::lock_guard<std::mutex> lock(status_mutex_);
-  status_.map_leaves = tree_->getNumLeafNodes();
-  status_.map_semantic_leaves = tree_->numSemanticNodes();
-  status_.map_memory_bytes = tree_->memoryUsage();
+  status_.map_leaves = leaves;
+  status_.map_semantic_leaves = semantic;
+  status_.map_memory_bytes = bytes;
 }
 
 void MappingServer::publishStatus() {

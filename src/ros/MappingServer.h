@@ -113,10 +113,15 @@ class MappingServer {
   // A service's path: relative paths are taken from the node's working directory.
   static std::string absolutePath(const std::string& path);
   // Map size into status_ (map mutex held). Counting leaves walks the whole map (tens of ms in a
-  // large one), so after an insert it is recorded when no cloud waits, else once a second.
+  // large one, growing with it), so after an insert it is recorded only when walks then take at
+  // most 2 % of the time (and, with clouds waiting, at most one a second); the insertion thread
+  // brings it up to date once clouds stop coming (recordMapSizeWhenIdle).
   void recordMapSize();
   void recordMapSizeAfterInsert();
+  void recordMapSizeWhenIdle();
   std::chrono::steady_clock::time_point map_size_recorded_{};
+  double map_size_walk_ms_ = 0.0;  // the last walk's duration
+  std::atomic<bool> map_size_stale_{false};  // inserts since the last walk
   // Autosave (~autosave_period): the thread, one autosave, and the resume at start-up.
   void autosaveLoop();
   double autosaveOnce();  // the map lock's hold [ms]

@@ -44,6 +44,13 @@ class LatestQueue {
     return item;
   }
 
+  // Waits at most `timeout` for an item (or the close); true when pop() would not wait.
+  template <class Duration>
+  bool waitFor(Duration timeout) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    return ready_.wait_for(lock, timeout, [&] { return closed_ || !items_.empty(); });
+  }
+
   // Wakes every waiting pop(), which then returns std::nullopt; later pushes are kept but
   // never popped.
   void close() {
