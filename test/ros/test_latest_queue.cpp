@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <thread>
 #include <vector>
 
@@ -50,6 +51,26 @@ TEST(LatestQueue, CloseWakesAWaitingConsumer) {
   consumer.join();
   EXPECT_TRUE(returned);
   EXPECT_FALSE(got);
+}
+
+// waitFor: false when nothing came within the timeout; true at once when an item waits or the
+// queue is closed (pop would not wait), and it takes nothing out.
+TEST(LatestQueue, WaitForSaysWhetherPopWouldWait) {
+  LatestQueue<int> queue(2);
+  EXPECT_FALSE(queue.waitFor(std::chrono::milliseconds(20)));
+  queue.push(5);
+  EXPECT_TRUE(queue.waitFor(std::chrono::milliseconds(0)));
+  EXPECT_EQ(queue.size(), 1u);
+  EXPECT_EQ(*queue.pop(), 5);
+  std::thread producer([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    queue.push(6);
+  });
+  EXPECT_TRUE(queue.waitFor(std::chrono::seconds(30)));  // woken by the push
+  producer.join();
+  EXPECT_EQ(*queue.pop(), 6);
+  queue.close();
+  EXPECT_TRUE(queue.waitFor(std::chrono::milliseconds(0)));
 }
 
 // Every pushed item is either popped or handed back as dropped, exactly once, with one producer
