@@ -52,7 +52,7 @@ struct Section {
 struct ScoredRow {
   std::string name;
   BlockScores scores;
-  std::vector<double> iou;  // per class over all queries (reference rows only)
+  std::vector<double> iou{};  // per class over all queries (reference rows only)
 };
 
 // One reference row: metrics of the answers, a table row and its block scores.
