@@ -260,7 +260,9 @@ void EvidentialOcTree::keepDropped(const VoxelUpdate* begin, const VoxelUpdate* 
 size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned depth, bool is_new,
                                             const VoxelUpdate* begin, const VoxelUpdate* end,
                                             const UpdateBatch& batch, Edit& edit) {
-  if (depth == tree_depth) return updateLeaf(node, *begin, batch, edit);
+  // Never called at the leaf depth: the subtrees start kSubtreeLevels >= 1 above it, and the
+  // level above the leaves hands them to applyLeafUpdates.
+  static_assert(kSubtreeLevels >= 1);
   if (!is_new && !nodeHasChildren(node)) {
     // A pruned block: misses on a block at the lower clamp, or hits on one at the upper clamp,
     // change nothing (OctoMap's early abort); anything else splits it.
