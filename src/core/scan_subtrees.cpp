@@ -144,6 +144,17 @@ void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, in
     const int block = ((z / kBlockSize) * kBlocks + y / kBlockSize) * kBlocks + x / kBlockSize;
     if (!(t->reached[block / 64] >> (block % 64) & 1)) return;
   }
+  std::vector<uint64_t>& mask = t->kernel.mask;
+  if (size == 2 && tree_->nodeHasChildren(node)) {  // its children are voxels: no recursion
+    for (unsigned c = 0; c < 8; ++c) {
+      if (!tree_->nodeChildExists(node, c)) continue;
+      if (targets_ == Targets::kOccupied && !tree_->isNodeOccupied(tree_->getNodeChild(node, c)))
+        continue;
+      mask[size_t(z + (c >> 2 & 1)) << kSubtreeLevels | (y + (c >> 1 & 1))] |=
+          uint64_t(1) << (x + (c & 1));
+    }
+    return;
+  }
   if (tree_->nodeHasChildren(node)) {
     const int half = size / 2;
     for (unsigned c = 0; c < 8; ++c) {
@@ -155,7 +166,6 @@ void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, in
     return;
   }
   const uint64_t bits = size >= 64 ? ~uint64_t(0) : ((uint64_t(1) << size) - 1) << x;
-  std::vector<uint64_t>& mask = t->kernel.mask;
   for (int zz = z; zz < z + size; ++zz)
     for (int yy = y; yy < y + size; ++yy) mask[size_t(zz) << kSubtreeLevels | yy] |= bits;
 }
