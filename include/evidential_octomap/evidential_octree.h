@@ -271,7 +271,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   void discountClearedLeaf(EvidentialOcTreeNode* leaf, Edit& edit);
   bool discountsClearings() const { return config_.clearing_observations > 0; }
   void expandLeaf(EvidentialOcTreeNode* node, Edit& edit);
-  bool pruneChildren(EvidentialOcTreeNode* node, Edit& edit);
+  bool pruneChildren(EvidentialOcTreeNode* node, Edit& edit);  // when isNodeCollapsible
+  void collapseChildren(EvidentialOcTreeNode* node, Edit& edit);
+  bool equalChildPayloads(const EvidentialOcTreeNode* node) const;
   void linkSummary(EvidentialOcTreeNode* node) const;
   void updateInnerNode(EvidentialOcTreeNode* node, Edit& edit);
   void updateInnerRecurs(EvidentialOcTreeNode* node, unsigned depth, Edit& edit);

@@ -313,9 +313,14 @@ void EvidentialOcTree::expandLeaf(EvidentialOcTreeNode* node, Edit& edit) {
   }
 }
 
-// Eight equal leaves become one; it keeps child 0's slot (the one a summary names on ties).
 bool EvidentialOcTree::pruneChildren(EvidentialOcTreeNode* node, Edit& edit) {
   if (!isNodeCollapsible(node)) return false;
+  collapseChildren(node, edit);
+  return true;
+}
+
+// Eight equal leaves become one; it keeps child 0's slot (the one a summary names on ties).
+void EvidentialOcTree::collapseChildren(EvidentialOcTreeNode* node, Edit& edit) {
   EvidentialOcTreeNode* first = getNodeChild(node, 0);
   node->copyData(*first);
   node->payload_ = first->payload_;
@@ -323,7 +328,6 @@ bool EvidentialOcTree::pruneChildren(EvidentialOcTreeNode* node, Edit& edit) {
   for (unsigned i = 1; i < 8; ++i) releaseLeafPayload(getNodeChild(node, i), edit);
   node->deleteLeafChildren();
   edit.nodes -= 8;
-  return true;
 }
 
 // --- the editing API -----------------------------------------------------------------------------
@@ -397,10 +401,37 @@ void EvidentialOcTree::linkSummary(EvidentialOcTreeNode* node) const {
   node->payload_ = richest ? richest->payload_ : EvidentialOcTreeNode::kNoPayload;
 }
 
+// One pass over the children gives what pruneChildren, updateOccupancyChildren and linkSummary
+// would each read them for: the update visits every inner node above the changed voxels.
 void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node, Edit& edit) {
-  if (pruneChildren(node, edit)) return;
-  node->updateOccupancyChildren();
-  linkSummary(node);
+  float max_log_odds = -std::numeric_limits<float>::max();  // OctoMap's getMaxChildLogOdds
+  const EvidentialOcTreeNode* richest = nullptr;            // richestChild
+  double richest_sum = -std::numeric_limits<double>::infinity();
+  const EvidentialOcTreeNode* first = nodeChildExists(node, 0) ? getNodeChild(node, 0) : nullptr;
+  bool equal_leaves = first != nullptr;  // isNodeCollapsible's first half
+  for (unsigned i = 0; i < 8; ++i) {
+    if (!nodeChildExists(node, i)) {
+      equal_leaves = false;
+      continue;
+    }
+    const EvidentialOcTreeNode* child = getNodeChild(node, i);
+    if (child->getLogOdds() > max_log_odds) max_log_odds = child->getLogOdds();
+    equal_leaves = equal_leaves && !nodeHasChildren(child) &&
+                   child->getValue() == first->getValue() &&
+                   child->hasSemantics() == first->hasSemantics();
+    if (!child->hasSemantics()) continue;
+    const double sum = pool_->sum(child->payload_);
+    if (sum > richest_sum) {
+      richest_sum = sum;
+      richest = child;
+    }
+  }
+  if (equal_leaves && equalChildPayloads(node)) {
+    collapseChildren(node, edit);
+    return;
+  }
+  node->setLogOdds(max_log_odds);
+  node->payload_ = richest ? richest->payload_ : EvidentialOcTreeNode::kNoPayload;
 }
 
 void EvidentialOcTree::updateInnerNodes() {
@@ -605,6 +636,12 @@ bool EvidentialOcTree::isNodeCollapsible(const EvidentialOcTreeNode* node) const
     // Unlike ColorOcTree, semantics must be identical too, so pruning never changes a query.
     if (first->hasSemantics() != child->hasSemantics()) return false;
   }
+  return equalChildPayloads(node);
+}
+
+// Of eight leaves that agree on occupancy and on having semantics.
+bool EvidentialOcTree::equalChildPayloads(const EvidentialOcTreeNode* node) const {
+  const EvidentialOcTreeNode* first = getNodeChild(node, 0);
   if (!first->hasSemantics()) return true;
   float first_values[kMaxClasses], child_values[kMaxClasses];
   pool_->decode(first->payload_, first_values);
