@@ -3,6 +3,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "evidential_octomap/class_table.h"
 
@@ -71,6 +72,7 @@ TEST(ClassTable, SmallFixtureIsReadExactly) {
   EXPECT_EQ(table.colors[0], (ClassTable::Rgb{10, 20, 30}));
   EXPECT_EQ(table.colors[1], (ClassTable::Rgb{0, 255, 0}));
   EXPECT_EQ(table.ignore_class, 2);
+  EXPECT_EQ(table.ground, (std::vector<bool>{true, false, false})) << "left out means false";
   EXPECT_EQ(table.learning_map.size(), 3u);
   EXPECT_EQ(table.classOfRaw(0), 2);
   EXPECT_EQ(table.classOfRaw(7), 0);
@@ -96,6 +98,21 @@ TEST(ClassTable, MappingToMissingClassThrowsNamingTheFile) {
 TEST(ClassTable, MissingClassListThrowsNamingTheFile) {
   const std::string path = kFixtures + "classes_no_classes.yaml";
   expectThrowNaming<std::runtime_error>([&] { ClassTable::load(path); }, {path});
+}
+
+TEST(ClassTable, GroundFlagThatIsNotABooleanThrowsNamingTheFile) {
+  const std::string path = kFixtures + "classes_bad_ground.yaml";
+  expectThrowNaming<std::runtime_error>([&] { ClassTable::load(path); }, {path, "maybe"});
+}
+
+TEST(ClassTable, ShippedTablesMarkTheirGroundSurfaces) {
+  const ClassTable kitti = ClassTable::load(kSourceDir + "/config/classes_semantickitti.yaml");
+  std::vector<std::string> ground;
+  for (int c = 0; c < kitti.numClasses(); ++c) {
+    if (kitti.ground[c]) ground.push_back(kitti.names[c]);
+  }
+  EXPECT_EQ(ground, (std::vector<std::string>{"road", "parking", "sidewalk", "other-ground",
+                                              "terrain"}));
 }
 
 TEST(ClassTable, MissingFileThrowsNamingThePath) {

@@ -186,6 +186,21 @@ void decodeLogOdds(const std::string& in, size_t* at, int width, const std::vect
   }
 }
 
+// The same map as format 8 wrote it (no ground_vertical_support and ground class flags: the f64
+// and C bytes before the node count), from a file of a map without ground classes.
+std::string toFormat8(const std::string& bytes, const EvidentialOcTree& tree) {
+  EXPECT_TRUE(tree.groundClasses().empty()) << "format 8 cannot say otherwise";
+  const size_t s = sectionStart(bytes);
+  const size_t classes = static_cast<size_t>(tree.numClasses());
+  const size_t field = rootOffset(bytes, tree.size()) - 8 - 8 - classes;
+  EXPECT_EQ(bytes.substr(field + 8, classes), std::string(classes, '\0'));
+  std::string old = bytes.substr(0, field) + bytes.substr(field + 8 + classes);
+  const uint32_t eight = 8;
+  std::memcpy(&old[s + kVersionOffset], &eight, 4);
+  reseal(&old);
+  return old;
+}
+
 // The same map as format 7 wrote it (no vertical_support: the f64 before the node count), from a
 // format-8 file of a map with a ball support.
 std::string toFormat7(const std::string& bytes, const EvidentialOcTree& tree) {
@@ -324,7 +339,7 @@ TEST(Integrity, NoAlteredFileLoadsAsADifferentMap) {
   RecordProperty("same", std::to_string(same));
 }
 
-TEST(Integrity, Format1To7FilesStillLoad) {
+TEST(Integrity, Format1To8FilesStillLoad) {
   Scratch scratch;
   for (const std::string rule : {"dempster", "ebs"}) {
     SemanticConfig config;
@@ -337,12 +352,14 @@ TEST(Integrity, Format1To7FilesStillLoad) {
       evidence.insert(evidence.end(), {float(i), 2.0f, i % 3 ? 0.0f : 0.5f});
     }
     tree->insertSemanticScan(points, evidence, octomap::point3d(0.1f, 0.1f, 0.5f));
-    const std::string v7 = toFormat7(otBytes(*tree), *tree), v6 = toFormat6(v7, *tree),
-                      v4 = toFormat4(v6, *tree), v2 = toFormat2(v4, *tree);
+    const std::string v8 = toFormat8(otBytes(*tree), *tree), v7 = toFormat7(v8, *tree),
+                      v6 = toFormat6(v7, *tree), v4 = toFormat4(v6, *tree),
+                      v2 = toFormat2(v4, *tree);
     ASSERT_GT(v4.size(), v6.size()) << "format 4 stores f32 log-odds";
     ASSERT_GT(v2.size(), v4.size()) << "format 2 stores inner payloads";
     for (const auto& [file, format] :
-         {std::pair(v7, "format 7"), std::pair(v6, "format 6"), std::pair(v4, "format 4")}) {
+         {std::pair(v8, "format 8"), std::pair(v7, "format 7"), std::pair(v6, "format 6"),
+          std::pair(v4, "format 4")}) {
       const std::string path = scratch.file("format.ot");
       writeBytes(path, file);
       std::unique_ptr<EvidentialOcTree> loaded;
@@ -350,6 +367,7 @@ TEST(Integrity, Format1To7FilesStillLoad) {
       EXPECT_TRUE(compareTrees(*tree, *loaded)) << rule << ", " << format;
       EXPECT_FALSE(loaded->config().semantic_occupied_only) << format;
       EXPECT_EQ(loaded->config().vertical_support, 1.0) << format << ": a ball, as then";
+      EXPECT_TRUE(loaded->groundClasses().empty()) << format << ": no ground class then";
     }
     // Formats before 4 predate the evidence cap: their maps are read without one.
     config.evidence_cap = 0.0;
@@ -373,7 +391,7 @@ TEST(Integrity, InnerNodeDisagreeingWithItsChildrenIsRefused) {
   Scratch scratch;
   const auto tree = smallMap();
   ASSERT_TRUE(tree->getRoot()->hasSemantics());
-  const std::string v7 = toFormat7(otBytes(*tree), *tree),
+  const std::string v7 = toFormat7(toFormat8(otBytes(*tree), *tree), *tree),
                     v4 = toFormat4(toFormat6(v7, *tree), *tree), v2 = toFormat2(v4, *tree);
   const size_t root = rootOffset(v4, tree->size());
   float root_value;

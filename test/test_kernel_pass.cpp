@@ -239,6 +239,39 @@ TEST(KernelPass, FlatterSupportKeepsGroundEvidenceOffAnUprightObject) {
   }
 }
 
+// The flatter support goes to the points of the ground classes only: marking the ground as a
+// ground class keeps its evidence off the pole as a flatter support for every point does;
+// marking no class, or only the pole, leaves the ground's ball, which outvotes the pole.
+TEST(KernelPass, GroundClassesGetTheGroundSupport) {
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  poleOnGround(&points, &evidence);
+  std::vector<bool> ground_only(kPoleClasses, false), pole_only(kPoleClasses, false);
+  ground_only[kGround] = true;
+  pole_only[kPole] = true;
+  for (const auto& ground : {std::vector<bool>(), ground_only, pole_only}) {
+    SemanticConfig config;
+    config.ground_vertical_support = 1.0 / 3.0;
+    config.ds_multiplier = 0.0;
+    config.threads = 2;
+    EvidentialOcTree tree(0.2, kPoleClasses, config);
+    tree.setGroundClasses(ground);
+    tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
+    const bool ground_is_flat = tree.isGroundClass(kGround);
+    const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
+    EXPECT_EQ(low_pole == kPole, ground_is_flat) << "ground flat " << ground_is_flat << ": label "
+                                                 << low_pole;
+    EXPECT_EQ(tree.query(octomap::point3d(0.05f, 0.05f, 0.9f)).label, kPole);
+    EXPECT_EQ(tree.query(octomap::point3d(0.45f, 0.05f, 0.02f)).label, kGround);
+  }
+}
+
+TEST(KernelPass, GroundFlagsMustBeOnePerClass) {
+  EvidentialOcTree tree(0.2, 3, SemanticConfig());
+  EXPECT_THROW(tree.setGroundClasses({true, false}), std::invalid_argument);
+  EXPECT_NO_THROW(tree.setGroundClasses({}));
+}
+
 TEST(FastLog1p, StaysWithinItsStatedErrorOfLibm) {
   EXPECT_EQ(fastLog1p(0.0), 0.0);
   double worst = 0.0;

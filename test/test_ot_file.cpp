@@ -133,6 +133,27 @@ TEST(OtFile, RoundTripThroughAbstractOcTreeReadIsBitExact) {
   }
 }
 
+// The ground classes and their support are part of the map: read back by OctoMap's reader, a
+// map goes on mapping (and answers queries) as the one written.
+TEST(OtFile, GroundClassesAndTheirSupportRoundTrip) {
+  TempDir dir;
+  auto tree = makeMap("dempster");
+  SemanticConfig config = tree->config();
+  config.ground_vertical_support = 0.4;
+  tree->setConfig(config);
+  const std::vector<bool> ground{true, false, true};
+  ASSERT_EQ(tree->numClasses(), int(ground.size()));
+  tree->setGroundClasses(ground);
+  const std::string path = dir.file("ground.ot");
+  ASSERT_TRUE(tree->write(path));
+  std::unique_ptr<octomap::AbstractOcTree> any(octomap::AbstractOcTree::read(path));
+  auto* read_back = dynamic_cast<EvidentialOcTree*>(any.get());
+  ASSERT_NE(read_back, nullptr);
+  EXPECT_EQ(read_back->groundClasses(), ground);
+  EXPECT_EQ(read_back->config().ground_vertical_support, 0.4);
+  EXPECT_TRUE(compareTrees(*tree, *read_back));
+}
+
 TEST(OtFile, StreamRoundTripIsBitExact) {
   const auto tree = makeMap("dempster");
   std::stringstream s;

@@ -99,6 +99,25 @@ TEST_F(QuerySupport, AFlatterSupportReachesLessFarUp) {
   for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(got[c], expected[c], 1e-5) << c;
 }
 
+TEST_F(QuerySupport, AGroundNeighbourReachesAsFarUpAsItsPoints) {
+  // ground_vertical_support 0.25 for class 1 (the voxel two below): it no longer reaches the
+  // query voxel, and the one beside it answers alone; with class 0 (the one beside) ground
+  // instead, nothing changes, since it lies level with the query voxel.
+  SemanticConfig config = surfaceOnly();
+  config.ground_vertical_support = 0.25;
+  tree.setConfig(config);
+  float ball[kClasses], got[kClasses];
+  ASSERT_TRUE(tree.answerPayload(kCentre, ball));
+  tree.setGroundClasses({false, true, false});
+  const double k_near = sparseKernel(0.1, supportLength(), 1.0);
+  ASSERT_TRUE(tree.answerPayload(kCentre, got));
+  for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(got[c], k_near * near_values[c], 1e-5) << c;
+  tree.setGroundClasses({true, false, false});
+  ASSERT_TRUE(tree.answerPayload(kCentre, got));
+  for (int c = 0; c < kClasses; ++c) EXPECT_EQ(got[c], ball[c]) << c;
+  EXPECT_NE(ball[1], 0.0f) << "the voxel below reaches the query voxel with a ball";
+}
+
 TEST_F(QuerySupport, VoxelWithEvidenceAnswersItsOwnOnly) {
   expectOpinionOf(tree, tree.query(tree.keyToCoord(offset(1, 0, 0))), near_values);
   expectOpinionOf(tree, tree.query(tree.keyToCoord(offset(0, 0, -2))), far_values);

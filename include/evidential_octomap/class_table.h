@@ -16,6 +16,9 @@ struct ClassTable {
   std::string dataset;               // e.g. "semantickitti"
   std::vector<std::string> names;    // C class names, index = class id
   std::vector<Rgb> colors;           // C colours (RGB)
+  // C flags: the class is a ground surface (`ground: true`; road, trail, grass): its points'
+  // kernel support is flatter (SemanticConfig::ground_vertical_support).
+  std::vector<bool> ground;
   int ignore_class = -1;             // class excluded from evaluation queries (-1: none)
   std::unordered_map<uint32_t, int> learning_map;  // raw label id -> class id
 

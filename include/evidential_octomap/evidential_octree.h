@@ -114,6 +114,14 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   int numClasses() const { return num_classes_; }
   const std::vector<std::string>& classNames() const { return class_names_; }
   void setClassNames(const std::vector<std::string>& names);  // size must be C
+  // Which classes are ground surfaces (ClassTable::ground): a point whose evidence's argmax is
+  // one gets the flatter support SemanticConfig::ground_vertical_support. Size C, or empty
+  // (none, the default). Stored in the .ot file.
+  void setGroundClasses(const std::vector<bool>& ground);
+  const std::vector<bool>& groundClasses() const { return ground_classes_; }
+  bool isGroundClass(int c) const {
+    return c >= 0 && size_t(c) < ground_classes_.size() && ground_classes_[c];
+  }
   const SemanticConfig& config() const { return config_; }
   // Throws std::invalid_argument for values SemanticConfig::problem() refuses. Changing the rule
   // re-interprets stored payloads, so it is refused (std::logic_error) while the map holds any.
@@ -241,6 +249,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // point without uncertainty, the voxels it spans, and the kernel-weighted values.
   double queryLength() const;
   std::array<int, 3> querySupportReach() const;  // voxels on x, y, z
+  double querySupportVertical() const;            // the tallest neighbour support / width
   bool supportPayload(const octomap::OcTreeKey& key, float* out) const;
   // Editing: detail/tree_editing.h says what each does.
   EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);
@@ -318,6 +327,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
 
   int num_classes_ = 1;
   std::vector<std::string> class_names_;
+  std::vector<bool> ground_classes_;  // empty: no ground class
   SemanticConfig config_;
   std::unique_ptr<FusionRule> rule_;
   std::unique_ptr<PayloadStore> pool_;  // one sparse payload per semantic leaf

@@ -85,6 +85,13 @@ struct MapSettings {
   // 0.5 keeps the person class, on generated forest and rocky scenes it costs Brier score
   // (docs/results_vertical_support.md).
   double vertical_support = 1.0;
+  // The same fraction for the points of ground classes (`ground: true` in the class table,
+  // EvidentialOcTree::setGroundClasses): their support is flatter than other points', so a
+  // road's, a trail's or a meadow's evidence stays on the ground instead of climbing a person,
+  // a trunk or a rock standing on it. 0.25 by default, chosen across datasets against 1 (a
+  // ball) and 0.5 (docs/results_ground_support.md). No class is ground unless the class table
+  // says so, so a table without the flag keeps every support at vertical_support.
+  double ground_vertical_support = 0.25;
   // Max sensor range [m] for occupancy and semantics; < 0 means unlimited.
   double max_range = -1.0;
   // Let kernel updates create leaves in unknown space (densification, S-BKI style). Created

@@ -97,6 +97,7 @@ def merge_in_order(earlier: ChunkMap, later: ChunkMap, unclamped: bool = False) 
         raise ValueError(f"chunks must be neighbours: scans ..{earlier.last_scan} and "
                          f"{later.first_scan}..")
     rest = EvidentialOcTree(earlier.tree.resolution, earlier.tree.class_names, earlier.tree.config)
+    rest.ground_classes = earlier.tree.ground_classes
     earlier.tree.add_evidence(later.unobserved, rest)  # before the later chunk's observations
     set_unbounded(earlier.tree, unclamped)
     earlier.tree.merge(later.tree)

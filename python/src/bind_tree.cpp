@@ -251,14 +251,18 @@ void bindTree(nb::module_& m) {
            "classes: the class names.")
       .def(nb::new_([](double resolution, const ClassTable& classes,
                        std::optional<SemanticConfig> config) {
-             return makeTree(resolution, classes.names, config);
+             auto tree = makeTree(resolution, classes.names, config);
+             tree->setGroundClasses(classes.ground);
+             return tree;
            }),
            nb::arg("resolution"), nb::arg("classes"), nb::arg("config") = nb::none(),
-           "classes: a ClassTable (its names are used).")
+           "classes: a ClassTable (its names and ground classes are used).")
       // --- settings
       .def_prop_ro("resolution", &Tree::getResolution)
       .def_prop_ro("num_classes", &Tree::numClasses)
       .def_prop_rw("class_names", &Tree::classNames, &Tree::setClassNames)
+      .def_prop_rw("ground_classes", &Tree::groundClasses, &Tree::setGroundClasses,
+                   "C flags (or none): classes whose points get ground_vertical_support.")
       .def_prop_ro(
           "config", [](const Tree& t) { return t.config(); }, "A copy of the mapping parameters.")
       .def("set_config", &Tree::setConfig, nb::arg("config"),

@@ -48,6 +48,13 @@ ClassTable ClassTable::load(const std::string& yaml_path) {
         rgb[i] = static_cast<uint8_t>(v);
       }
       table.colors.push_back(rgb);
+      bool ground = false;
+      const YAML::Node flag = entry["ground"];
+      if (flag && !YAML::convert<bool>::decode(flag, ground)) {
+        throw fail("class '" + table.names.back() + "': ground must be true or false, not '" +
+                   flag.as<std::string>() + "'");
+      }
+      table.ground.push_back(ground);
     }
     table.ignore_class = root["ignore_class"] ? root["ignore_class"].as<int>() : -1;
     if (table.ignore_class >= table.numClasses()) throw fail("ignore_class out of range");

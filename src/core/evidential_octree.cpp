@@ -76,6 +76,7 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
     : OccupancyOcTreeBase<EvidentialOcTreeNode>(rhs.resolution),
       num_classes_(rhs.num_classes_),
       class_names_(rhs.class_names_),
+      ground_classes_(rhs.ground_classes_),
       config_(rhs.config_),
       rule_(rhs.makeRule(rhs.config_)),
       pool_(std::make_unique<PayloadStore>(rhs.num_classes_, rhs.rule_->prior())),
@@ -109,6 +110,7 @@ void EvidentialOcTree::setNumClasses(int num_classes) {
   pool_->reset(num_classes, pool_->prior());
   class_names_.clear();
   for (int c = 0; c < num_classes; ++c) class_names_.push_back("class_" + std::to_string(c));
+  ground_classes_.clear();
 }
 
 void EvidentialOcTree::setClassNames(const std::vector<std::string>& names) {
@@ -117,6 +119,14 @@ void EvidentialOcTree::setClassNames(const std::vector<std::string>& names) {
                                 std::to_string(names.size()));
   }
   class_names_ = names;
+}
+
+void EvidentialOcTree::setGroundClasses(const std::vector<bool>& ground) {
+  if (!ground.empty() && static_cast<int>(ground.size()) != num_classes_) {
+    throw std::invalid_argument("expected " + std::to_string(num_classes_) +
+                                " ground flags (or none), got " + std::to_string(ground.size()));
+  }
+  ground_classes_ = ground;
 }
 
 void EvidentialOcTree::setConfig(const SemanticConfig& config) {

@@ -24,6 +24,7 @@ KernelPass::KernelPass(const SemanticConfig& config, const EvidentialOcTree& tre
       beta_(config.beta),
       gamma_(config.effectiveGamma()),
       vertical_support_(config.vertical_support),
+      ground_vertical_support_(config.ground_vertical_support),
       uncertainty_kernel_(tree.rule().usesUncertaintyKernel()),
       to_cube_(config.kernel_distance == "voxel"),
       class_aware_(config.class_aware_support),
@@ -55,12 +56,14 @@ void KernelPass::preparePoints(const SemanticPoints& points, int threads,
         uncertainty_kernel_ ? adaptiveLength(length_scale_, beta_, gamma_, o.uncertainty)
                             : length_scale_);
     kp.inv_length2 = 1.0 / (double(length) * length);
+    const double vertical =
+        tree_.isGroundClass(o.argmax) ? ground_vertical_support_ : vertical_support_;
+    kp.inv_length2_z = kp.inv_length2 / (vertical * vertical);
     // A voxel can take part when its cube (or centre) is within L on x and y, and within
-    // L * vertical_support on z.
+    // L * vertical on z.
     const double extra = to_cube_ ? 1.0 : 0.5;
     kp.reach[0] = kp.reach[1] = static_cast<int>(std::floor(length / resolution + extra)) + 1;
-    kp.reach[2] =
-        static_cast<int>(std::floor(length * vertical_support_ / resolution + extra)) + 1;
+    kp.reach[2] = static_cast<int>(std::floor(length * vertical / resolution + extra)) + 1;
     kp.key = tree_.coordToKey(points.positions[j]);
   }
 }
@@ -140,7 +143,7 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
   }
   // d^2 = sum over the axes of a term per axis offset: the gap between the point and the
   // voxel's cube (or centre) along that axis, squared and divided by L^2 (on z by
-  // (L vertical_support)^2).
+  // (L vertical)^2, the point's vertical fraction).
   const double half = tree_.getResolution() / 2.0;
   std::vector<double>& terms = out->axis_terms;
   const int stride = 2 * point.reach[0] + 1;  // the widest axis
@@ -148,8 +151,7 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
   double* axis[3];
   for (int a = 0; a < 3; ++a) {
     axis[a] = &terms[a * stride] - lo[a];
-    const double inv_length2 =
-        a == 2 ? point.inv_length2 / (vertical_support_ * vertical_support_) : point.inv_length2;
+    const double inv_length2 = a == 2 ? point.inv_length2_z : point.inv_length2;
     for (int o = lo[a]; o <= hi[a]; ++o) {
       const float centre =
           static_cast<float>(tree_.keyToCoord(static_cast<octomap::key_type>(point.key[a] + o)));

@@ -46,7 +46,8 @@ class KernelTable {
 // A semantic point ready for the kernel.
 struct KernelPoint {
   octomap::OcTreeKey key;    // its voxel
-  double inv_length2 = 0.0;   // 1 / L^2 of its support (horizontally; vertical_support scales z)
+  double inv_length2 = 0.0;     // 1 / L^2 of its support across
+  double inv_length2_z = 0.0;   // and along z: 1 / (L vertical_support)^2 (ground: its own)
   std::array<int, 3> reach{};  // voxels it may reach: |offset| <= reach[a] along axis a
   PointOpinion opinion;
 };
@@ -105,6 +106,7 @@ class KernelPass {
   int num_classes_;
   double length_scale_, beta_, gamma_;
   double vertical_support_;
+  double ground_vertical_support_;
   bool uncertainty_kernel_;
   bool to_cube_;
   bool class_aware_;

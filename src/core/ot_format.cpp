@@ -1,5 +1,5 @@
 // The data section of an EvidentialOcTree .ot file (what AbstractOcTree::write puts after OctoMap's
-// text header "id / size / res / data"). Little-endian, format 8:
+// text header "id / size / res / data"). Little-endian, format 9:
 //
 //   u32 magic "EVEM", u32 format, f64 resolution (2+), u32 C, C x string class name,
 //   string rule, string downsampling (2+), string kernel_distance (2+), 7 x f64 (length_scale
@@ -8,7 +8,8 @@
 //   (4+; older maps are read without a cap, as they were written), f64 + u64 the adaptive
 //   cap's statistic (sum and count, 6+; evidence_cap -1 = adaptive), u8 semantic_occupied_only
 //   (7+; older maps kept evidence in free space too), f64 vertical_support (8+; older maps had a
-//   ball), u64 node count, log-odds coding (5+),
+//   ball), f64 ground_vertical_support and C x u8 ground class flags (9+; older maps had no
+//   ground class), u64 node count, log-odds coding (5+),
 //   nodes in depth-first order, u32 end magic, u32 CRC-32 (2+) of every byte from the magic to
 //   the end magic.
 //   log-odds coding (5+): u8 width W (1, 2 or 4); for W < 4 u32 T (<= 256 for W = 1,
@@ -23,7 +24,7 @@
 //   node (1, 2): f32 log-odds, u8 child mask, u8 has-payload, [C x f32 payload], inner nodes too
 //   string: u32 length (<= 4096), bytes
 //
-// Format 1 (before the CRC) has no resolution field and no CRC; formats 1 to 7 are still read.
+// Format 1 (before the CRC) has no resolution field and no CRC; formats 1 to 8 are still read.
 // OctoMap's own header prints `res` with the stream's precision (6 digits unless the writer sets
 // more), so formats 2+ keep the exact resolution in the section and the reader restores it.
 #include <algorithm>
@@ -55,7 +56,8 @@ constexpr uint32_t kFormatLogOddsTable = 5;  // log-odds coded by a table
 constexpr uint32_t kFormatAdaptiveCap = 6;    // the adaptive cap's statistic
 constexpr uint32_t kFormatSurfaceEvidence = 7;  // semantic_occupied_only
 constexpr uint32_t kFormatVerticalSupport = 8;
-constexpr uint32_t kFormat = 8;
+constexpr uint32_t kFormatGroundClasses = 9;
+constexpr uint32_t kFormat = 9;
 constexpr uint32_t kMaxNameLength = 4096;
 constexpr uint8_t kNoPayloadTag = 0;
 constexpr uint8_t kDenseTag = 1;
@@ -268,6 +270,8 @@ void EvidentialOcTree::writeHeader(SectionWriter& out) const {
   out.pod(static_cast<uint64_t>(evidence_points_));
   out.pod(static_cast<uint8_t>(config_.semantic_occupied_only));
   out.pod(config_.vertical_support);
+  out.pod(config_.ground_vertical_support);
+  for (int c = 0; c < num_classes_; ++c) out.pod(static_cast<uint8_t>(isGroundClass(c)));
 }
 
 // Depth first, child 0 first. Returns false (and stops) at the first inner node whose occupancy
@@ -419,6 +423,17 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
     config.semantic_occupied_only = byte != 0;
   }
   if (version >= kFormatVerticalSupport) config.vertical_support = in.pod<double>("parameters");
+  std::vector<bool> ground;  // none before format 9
+  if (version >= kFormatGroundClasses) {
+    config.ground_vertical_support = in.pod<double>("parameters");
+    ground.resize(names.size());
+    for (size_t c = 0; c < names.size(); ++c) {
+      const uint8_t byte = in.pod<uint8_t>("ground class flags");
+      if (byte > 1) throw FormatError("bad ground class flag");
+      ground[c] = byte != 0;
+    }
+    if (std::none_of(ground.begin(), ground.end(), [](bool g) { return g; })) ground.clear();
+  }
   const std::string problem = storedParameterProblem(resolution, occupancy, config);
   if (!problem.empty()) throw FormatError("bad parameters: " + problem);
   setConfig(config);
@@ -426,6 +441,7 @@ void EvidentialOcTree::readHeader(SectionReader& in, uint32_t version) {
   evidence_points_ = static_cast<size_t>(points);
   followEvidenceStatistic();
   setClassNames(names);
+  setGroundClasses(ground);
   clamping_thres_min = occupancy[0];
   clamping_thres_max = occupancy[1];
   prob_hit_log = occupancy[2];

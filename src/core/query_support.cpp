@@ -20,8 +20,15 @@ std::array<int, 3> EvidentialOcTree::querySupportReach() const {
   const double extra = config_.kernel_distance == "voxel" ? 1.0 : 0.5;
   const int across = static_cast<int>(std::floor(length / resolution + extra));
   const int up =
-      static_cast<int>(std::floor(length * config_.vertical_support / resolution + extra));
+      static_cast<int>(std::floor(length * querySupportVertical() / resolution + extra));
   return {across, across, up};
+}
+
+// The tallest support of any neighbour.
+double EvidentialOcTree::querySupportVertical() const {
+  return ground_classes_.empty()
+             ? config_.vertical_support
+             : std::max(config_.vertical_support, config_.ground_vertical_support);
 }
 
 double EvidentialOcTree::queryLength() const {
@@ -33,9 +40,9 @@ double EvidentialOcTree::queryLength() const {
 
 bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out) const {
   const std::array<int, 3> reach = querySupportReach();
+  const double widest = querySupportVertical();
   const double length = queryLength();
   const double half = config_.kernel_distance == "voxel" ? resolution / 2.0 : 0.0;
-  const double up = config_.vertical_support;
   const float prior = rule_->prior();
   double sum[kMaxClasses] = {};
   double weight_sum = 0.0, nearest = 0.0;
@@ -46,12 +53,18 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out)
         if (!dx && !dy && !dz) continue;
         const int x = int(key[0]) + dx, y = int(key[1]) + dy, z = int(key[2]) + dz;
         if (std::min({x, y, z}) < 0 || std::max({x, y, z}) > 0xFFFF) continue;
-        const double d =
-            kernelDistance(dx * resolution, dy * resolution, dz * resolution, half, up);
-        const double k = std::min(1.0, sparseKernel(d, length, config_.sigma0));
+        const auto weight = [&](double up) {
+          const double d =
+              kernelDistance(dx * resolution, dy * resolution, dz * resolution, half, up);
+          return std::min(1.0, sparseKernel(d, length, config_.sigma0));
+        };
+        if (!(weight(widest) > 0.0)) continue;
+        if (!payload(search(octomap::OcTreeKey(x, y, z)), values)) continue;
+        // A neighbour of a ground class reaches as far up as its points did.
+        const int label = int(std::max_element(values, values + num_classes_) - values);
+        const double k = weight(isGroundClass(label) ? config_.ground_vertical_support
+                                                     : config_.vertical_support);
         if (!(k > 0.0)) continue;
-        const octomap::OcTreeKey neighbour(x, y, z);
-        if (!payload(search(neighbour), values)) continue;
         for (int c = 0; c < num_classes_; ++c) sum[c] += k * (double(values[c]) - prior);
         weight_sum += k;
         nearest = std::max(nearest, k);

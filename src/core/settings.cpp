@@ -105,6 +105,10 @@ std::vector<Setting> makeList() {
           "The kernel support's height as a fraction of its width (map z; 1: a ball; lower keeps "
           "ground evidence off thin upright objects)")
         .range({0.0, 1.0, true, false, kNaN, "in (0, 1]"}).reconfigurable(0.05, 1.0),
+    Entry("ground_vertical_support", &MapSettings::ground_vertical_support, kMap,
+          "The kernel support's height as a fraction of its width for points of ground classes "
+          "(class table ground: true), so their evidence stays off what stands on the ground")
+        .range({0.0, 1.0, true, false, kNaN, "in (0, 1]"}).reconfigurable(0.05, 1.0),
     Entry("max_range", &MapSettings::max_range, kMap, "Max sensor range [m] (< 0: unlimited)")
         .range({-kInf, kInf, false, false, kNaN, "a number (< 0: unlimited)"})
         .ros("sensor_model/max_range").reconfigurable(-1.0, 500.0),

@@ -215,6 +215,7 @@ std::unique_ptr<EvidentialOcTree> MappingServer::makeTree(const SemanticConfig& 
   const double resolution = tree_ ? tree_->getResolution() : config_.resolution;
   auto tree = std::make_unique<EvidentialOcTree>(resolution, config_.num_classes, semantic);
   tree->setClassNames(classes_.names);
+  tree->setGroundClasses(classes_.ground);
   if (tree_) {  // keep the sensor model in use (it may have been changed at run time)
     tree->setSensorModel(tree_->sensorModel());
   } else {
@@ -552,6 +553,7 @@ std::unique_ptr<EvidentialOcTree> MappingServer::readMapFile(const std::string& 
   if (*occupancy_only) {
     tree = loadBinaryOccupancy(path, config_.num_classes, SemanticConfig());  // see adoptMap
     tree->setClassNames(classes_.names);
+    tree->setGroundClasses(classes_.ground);
   } else {
     const uint64_t limit =
         config_.load_map_max_mb > 0.0 ? uint64_t(config_.load_map_max_mb * 1e6) : 0;

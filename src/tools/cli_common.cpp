@@ -122,6 +122,8 @@ std::string variantName(const SemanticConfig& c) {
       v += " kernel distance " + c.kernel_distance;
     if (c.vertical_support != SemanticConfig().vertical_support)
       v += " vertical support " + std::to_string(c.vertical_support).substr(0, 4);
+    if (c.ground_vertical_support != SemanticConfig().ground_vertical_support)
+      v += " ground support " + std::to_string(c.ground_vertical_support).substr(0, 4);
     if (c.downsampling != SemanticConfig().downsampling && !c.reference_compat)
       v += " " + c.downsampling;
   }
