@@ -3,7 +3,8 @@
 # (every rule x evidence source x protocol on the bundled scans), results_ablation.md (kernel
 # ablations of the default), images/quality_learned.png, and the cross-dataset block,
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
-# cross_dataset.sh), and results_vertical_support.md (scripts/calibration/across_datasets.sh).
+# cross_dataset.sh), results_vertical_support.md and results_ground_support.md
+# (scripts/calibration/across_datasets.sh).
 # Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
 # CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
@@ -46,5 +47,10 @@ if [ "${CROSS:-1}" != 0 ]; then
   SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
     dempster,dempster:vertical_support=0.75,dempster:vertical_support=0.5 \
     results_vertical_support.md "The kernel support's height (vertical_support) across datasets" \
+    "${out}/across_datasets"
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
+    dempster:ground_vertical_support=1,dempster:ground_vertical_support=0.5,dempster \
+    results_ground_support.md \
+    "The support height of ground classes (ground_vertical_support) across datasets" \
     "${out}/across_datasets"
 fi
