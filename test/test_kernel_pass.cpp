@@ -196,46 +196,45 @@ void poleOnGround(octomap::Pointcloud* points, std::vector<float>* evidence) {
   for (float z = 0.1f; z <= 1.2f; z += 0.1f) add(0.05f, 0.05f, z, kPole);
 }
 
-// With the class-aware support the pole's voxels near the ground keep the pole's class, without
-// it the ground's many points outvote it; the ground itself keeps its class either way.
-TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
+// The label of the pole's voxel just above the ground's, once the pole on its ground is mapped
+// with `config` (the count cap off: it would keep a 2x2x2 block's first points only) and the
+// `ground` classes; the pole's upper voxels and the ground's plane keep their class whatever
+// the support.
+int lowPoleLabel(SemanticConfig config, const std::vector<bool>& ground = {}) {
   octomap::Pointcloud points;
   std::vector<float> evidence;
   poleOnGround(&points, &evidence);
+  config.ds_multiplier = 0.0;
+  config.threads = 2;
+  EvidentialOcTree tree(0.2, kPoleClasses, config);
+  tree.setGroundClasses(ground);
+  tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
+  EXPECT_EQ(tree.query(octomap::point3d(0.05f, 0.05f, 0.9f)).label, kPole);
+  EXPECT_EQ(tree.query(octomap::point3d(0.45f, 0.05f, 0.02f)).label, kGround);
+  return tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
+}
+
+// With the class-aware support the pole's voxels near the ground keep the pole's class, without
+// it the ground's many points outvote it.
+TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
   for (bool class_aware : {false, true}) {
     SemanticConfig config;
     config.class_aware_support = class_aware;
-    config.ds_multiplier = 0.0;  // the count cap would keep a 2x2x2 block's first points only
-    config.threads = 2;
-    EvidentialOcTree tree(0.2, kPoleClasses, config);
-    tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
-    const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
+    const int low_pole = lowPoleLabel(config);
     EXPECT_EQ(low_pole == kPole, class_aware) << "class-aware " << class_aware << ": label "
                                               << low_pole;
-    EXPECT_EQ(tree.query(octomap::point3d(0.05f, 0.05f, 0.9f)).label, kPole);
-    EXPECT_EQ(tree.query(octomap::point3d(0.45f, 0.05f, 0.02f)).label, kGround);
   }
 }
 
-// The same pole on the same ground: with a support a third as tall as wide the ground's points
-// no longer reach the pole's voxels above the ground's own, and the ground still fills its
-// own plane.
+// With a support a third as tall as wide the ground's points no longer reach the pole's voxels
+// above the ground's own.
 TEST(KernelPass, FlatterSupportKeepsGroundEvidenceOffAnUprightObject) {
-  octomap::Pointcloud points;
-  std::vector<float> evidence;
-  poleOnGround(&points, &evidence);
   for (double vertical : {1.0, 1.0 / 3.0}) {
     SemanticConfig config;
     config.vertical_support = vertical;
-    config.ds_multiplier = 0.0;
-    config.threads = 2;
-    EvidentialOcTree tree(0.2, kPoleClasses, config);
-    tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
-    const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
+    const int low_pole = lowPoleLabel(config);
     EXPECT_EQ(low_pole == kPole, vertical < 1.0) << "vertical_support " << vertical << ": label "
                                                  << low_pole;
-    EXPECT_EQ(tree.query(octomap::point3d(0.05f, 0.05f, 0.9f)).label, kPole);
-    EXPECT_EQ(tree.query(octomap::point3d(0.45f, 0.05f, 0.02f)).label, kGround);
   }
 }
 
@@ -243,26 +242,16 @@ TEST(KernelPass, FlatterSupportKeepsGroundEvidenceOffAnUprightObject) {
 // ground class keeps its evidence off the pole as a flatter support for every point does;
 // marking no class, or only the pole, leaves the ground's ball, which outvotes the pole.
 TEST(KernelPass, GroundClassesGetTheGroundSupport) {
-  octomap::Pointcloud points;
-  std::vector<float> evidence;
-  poleOnGround(&points, &evidence);
   std::vector<bool> ground_only(kPoleClasses, false), pole_only(kPoleClasses, false);
   ground_only[kGround] = true;
   pole_only[kPole] = true;
+  SemanticConfig config;
+  config.ground_vertical_support = 1.0 / 3.0;
   for (const auto& ground : {std::vector<bool>(), ground_only, pole_only}) {
-    SemanticConfig config;
-    config.ground_vertical_support = 1.0 / 3.0;
-    config.ds_multiplier = 0.0;
-    config.threads = 2;
-    EvidentialOcTree tree(0.2, kPoleClasses, config);
-    tree.setGroundClasses(ground);
-    tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
-    const bool ground_is_flat = tree.isGroundClass(kGround);
-    const int low_pole = tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
+    const bool ground_is_flat = !ground.empty() && ground[kGround];
+    const int low_pole = lowPoleLabel(config, ground);
     EXPECT_EQ(low_pole == kPole, ground_is_flat) << "ground flat " << ground_is_flat << ": label "
                                                  << low_pole;
-    EXPECT_EQ(tree.query(octomap::point3d(0.05f, 0.05f, 0.9f)).label, kPole);
-    EXPECT_EQ(tree.query(octomap::point3d(0.45f, 0.05f, 0.02f)).label, kGround);
   }
 }
 
