@@ -389,17 +389,20 @@ EvidentialOcTreeNode* EvidentialOcTree::leafForUpdate(const octomap::OcTreeKey& 
 
 // --- inner nodes -------------------------------------------------------------------------------
 
+bool EvidentialOcTree::isRicher(const EvidentialOcTreeNode* child, double* richest_sum) const {
+  if (!child->hasSemantics()) return false;
+  const double sum = pool_->sum(child->payload_);
+  if (!(sum > *richest_sum)) return false;  // the first child wins ties
+  *richest_sum = sum;
+  return true;
+}
+
 const EvidentialOcTreeNode* EvidentialOcTree::richestChild(const EvidentialOcTreeNode* node) const {
   const EvidentialOcTreeNode* richest = nullptr;
   double richest_sum = -std::numeric_limits<double>::infinity();
   for (unsigned i = 0; i < 8; ++i) {
-    if (!nodeChildExists(node, i)) continue;
-    const EvidentialOcTreeNode* child = getNodeChild(node, i);
-    if (!child->hasSemantics()) continue;
-    const double sum = pool_->sum(child->payload_);
-    if (sum > richest_sum) {
-      richest_sum = sum;
-      richest = child;
+    if (nodeChildExists(node, i) && isRicher(getNodeChild(node, i), &richest_sum)) {
+      richest = getNodeChild(node, i);
     }
   }
   return richest;
@@ -429,12 +432,7 @@ void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node, Edit& edit) {
     equal_leaves = equal_leaves && !nodeHasChildren(child) &&
                    child->getValue() == first->getValue() &&
                    child->hasSemantics() == first->hasSemantics();
-    if (!child->hasSemantics()) continue;
-    const double sum = pool_->sum(child->payload_);
-    if (sum > richest_sum) {
-      richest_sum = sum;
-      richest = child;
-    }
+    if (isRicher(child, &richest_sum)) richest = child;
   }
   if (equal_leaves && equalChildPayloads(node)) {
     collapseChildren(node, edit);

@@ -58,12 +58,14 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out)
               kernelDistance(dx * resolution, dy * resolution, dz * resolution, half, up);
           return std::min(1.0, sparseKernel(d, length, config_.sigma0));
         };
-        if (!(weight(widest) > 0.0)) continue;
+        const double k_widest = weight(widest);
+        if (!(k_widest > 0.0)) continue;
         if (!payload(search(octomap::OcTreeKey(x, y, z)), values)) continue;
         // A neighbour of a ground class reaches as far up as its points did.
         const int label = int(std::max_element(values, values + num_classes_) - values);
-        const double k = weight(isGroundClass(label) ? config_.ground_vertical_support
-                                                     : config_.vertical_support);
+        const double up =
+            isGroundClass(label) ? config_.ground_vertical_support : config_.vertical_support;
+        const double k = up == widest ? k_widest : weight(up);
         if (!(k > 0.0)) continue;
         for (int c = 0; c < num_classes_; ++c) sum[c] += k * (double(values[c]) - prior);
         weight_sum += k;
