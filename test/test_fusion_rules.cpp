@@ -321,7 +321,7 @@ TEST(DempsterRule, MapPayloadAgreesWithBeliefSpaceInBothOrders) {
   }
 }
 
-// --- integrator level: single-point scans, kernel value 1 at the voxel centre ---------------
+// --- integrator level: single-point scans, kernel value sigma0 at the voxel centre ----------
 
 TEST(DempsterRule, IntegratedScansAgreeWithBeliefSpaceInBothOrders) {
   const int num_classes = 4;
@@ -366,11 +366,12 @@ TEST(DempsterRule, IntegratedScansAgreeWithBeliefSpaceInBothOrders) {
 
   Opinion expected = Opinion::vacuous(num_classes), expected_above = Opinion::vacuous(num_classes);
   for (const auto& e : evidence) {
-    expected = dempsterCombine(expected, extended(e, 1.0));
+    // The own voxel gets the kernel's value at d = 0, sigma0 (the point's reliability).
+    expected = dempsterCombine(expected, extended(e, config.sigma0));
     const double u = opinionFromEvidence(e.data(), num_classes).uncertainty;
     const double support = 0.3 * 1.0 * std::exp(1.0 - 3.0 * u);  // l beta e^{1 - gamma u}
-    expected_above =
-        dempsterCombine(expected_above, extended(e, kernelClosedForm(d_above, support, 1.0)));
+    expected_above = dempsterCombine(
+        expected_above, extended(e, kernelClosedForm(d_above, support, config.sigma0)));
   }
   ASSERT_LT(expected_above.uncertainty, 1.0);  // the neighbour did receive evidence
   for (const auto* tree : {forward_tree.get(), backward_tree.get()}) {

@@ -226,10 +226,10 @@ TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
   }
 }
 
-// With a support a third as tall as wide the ground's points no longer reach the pole's voxels
+// With a support a quarter as tall as wide the ground's points no longer reach the pole's voxels
 // above the ground's own.
 TEST(KernelPass, FlatterSupportKeepsGroundEvidenceOffAnUprightObject) {
-  for (double vertical : {1.0, 1.0 / 3.0}) {
+  for (double vertical : {1.0, 0.25}) {
     SemanticConfig config;
     config.vertical_support = vertical;
     const int low_pole = lowPoleLabel(config);

@@ -44,6 +44,9 @@ double supportLength() {
   return c.length_scale * c.beta * std::exp(1.0);
 }
 
+// The default kernel's weight at distance d from a point without uncertainty.
+double kernelAt(double d) { return sparseKernel(d, supportLength(), SemanticConfig().sigma0); }
+
 void expectOpinionOf(const EvidentialOcTree& tree, const VoxelOpinion& got,
                      const std::vector<float>& payload) {
   const VoxelOpinion want = tree.rule().readout(payload.data(), kClasses);
@@ -69,8 +72,8 @@ class QuerySupport : public ::testing::Test {
 
 TEST_F(QuerySupport, KnownVoxelWithoutEvidenceAnswersTheDiscountedKernelMeanOfItsNeighbours) {
   // Distances from the query voxel's centre to the neighbours' cubes: 0.1 m and 0.3 m.
-  const double k_near = sparseKernel(0.1, supportLength(), 1.0);
-  const double k_far = sparseKernel(0.3, supportLength(), 1.0);
+  const double k_near = kernelAt(0.1);
+  const double k_far = kernelAt(0.3);
   ASSERT_GT(k_far, 0.0);
   ASSERT_GT(k_near, k_far);
   std::vector<float> expected(kClasses);
@@ -91,7 +94,7 @@ TEST_F(QuerySupport, AFlatterSupportReachesLessFarUp) {
   config.vertical_support = 0.25;
   tree.setConfig(config);
   ASSERT_GT(0.3 / 0.25, supportLength());
-  const double k_near = sparseKernel(0.1, supportLength(), 1.0);
+  const double k_near = kernelAt(0.1);
   std::vector<float> expected(kClasses);
   for (int c = 0; c < kClasses; ++c) expected[c] = float(k_near * near_values[c]);
   float got[kClasses];
@@ -109,7 +112,7 @@ TEST_F(QuerySupport, AGroundNeighbourReachesAsFarUpAsItsPoints) {
   float ball[kClasses], got[kClasses];
   ASSERT_TRUE(tree.answerPayload(kCentre, ball));
   tree.setGroundClasses({false, true, false});
-  const double k_near = sparseKernel(0.1, supportLength(), 1.0);
+  const double k_near = kernelAt(0.1);
   ASSERT_TRUE(tree.answerPayload(kCentre, got));
   for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(got[c], k_near * near_values[c], 1e-5) << c;
   tree.setGroundClasses({true, false, false});

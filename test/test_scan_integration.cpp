@@ -728,10 +728,11 @@ TEST(KernelSettings, SbkiUsesThePlainKernelOnTheArgmax) {
   sbki.ds_multiplier = 0.0;
   const std::vector<float> e{0.0f, 0.3f, 0.1f};  // uncertain, argmax 1
   const VoxelOpinion above = neighbourAfterOnePoint(sbki, e, 1);
-  // d = 0.1 m to the cube above: k'(0.1, 0.3, 1) = (2 + cos(2 pi / 3))/3 (2/3) + sin(2 pi / 3) / (2
-  // pi)
+  // d = 0.1 m to the cube above:
+  // k'(0.1, 0.3, sigma0) = sigma0 [(2 + cos(2 pi / 3))/3 (2/3) + sin(2 pi / 3) / (2 pi)]
   const double pi = 3.14159265358979323846;
-  const double k = (2 + std::cos(2 * pi / 3)) / 3 * 2 / 3 + std::sin(2 * pi / 3) / (2 * pi);
+  const double k =
+      sbki.sigma0 * ((2 + std::cos(2 * pi / 3)) / 3 * 2 / 3 + std::sin(2 * pi / 3) / (2 * pi));
   const double prior = sbki.sbki_prior;
   const double s = 3 * prior + k;
   EXPECT_EQ(above.label, 1);
@@ -756,8 +757,8 @@ TEST(KernelSettings, SbkiCountsScaleWithSigma0AboveOne) {
 
 TEST(KernelSettings, PointAlwaysReachesItsOwnVoxel) {
   // A weak point (u = 3 / 3.2, L ~ 0.049 m) near the corner of its voxel [0, 0.2]^3: 0.156 m
-  // from the centre. Measured to the voxel's cube it is inside (d = 0, k = 1), so the voxel
-  // holds exactly the point's opinion; measured to the centre it gets nothing.
+  // from the centre. Measured to the voxel's cube it is inside (d = 0, k = sigma0), so the voxel
+  // holds the point's opinion discounted by sigma0; measured to the centre it gets nothing.
   const std::vector<float> weak{0.2f, 0.0f, 0.0f};
   octomap::Pointcloud points;
   points.push_back(0.01f, 0.01f, 0.01f);
@@ -771,8 +772,8 @@ TEST(KernelSettings, PointAlwaysReachesItsOwnVoxel) {
   by_centre.insertSemanticScan(points, weak, octomap::point3d(-2.9f, 0.1f, 0.1f));
   const VoxelOpinion own = by_voxel.query(octomap::point3d(0.1f, 0.1f, 0.1f));
   EXPECT_EQ(own.label, 0);
-  EXPECT_NEAR(own.belief[0], 0.2 / 3.2, 1e-6);  // b = e / S
-  EXPECT_NEAR(own.uncertainty, 3.0 / 3.2, 1e-6);
+  EXPECT_NEAR(own.belief[0], voxel.sigma0 * 0.2 / 3.2, 1e-6);  // k b, b = e / S
+  EXPECT_NEAR(own.uncertainty, 1.0 - voxel.sigma0 * (1.0 - 3.0 / 3.2), 1e-6);  // 1 - k (1 - u)
   EXPECT_EQ(by_centre.query(octomap::point3d(0.1f, 0.1f, 0.1f)).label, -1);
 }
 

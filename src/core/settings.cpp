@@ -60,7 +60,8 @@ std::vector<Setting> makeList() {
         .choices(rules),
     Entry("length_scale", &MapSettings::length_scale, kMap, "Kernel length scale l [m]")
         .range(kPositive).reconfigurable(0.01, 5.0),
-    Entry("sigma0", &MapSettings::sigma0, kMap, "Kernel amplitude")
+    Entry("sigma0", &MapSettings::sigma0, kMap,
+          "Kernel amplitude: a point's weight in its own voxel (dempster: its reliability)")
         .range(kPositive).reconfigurable(0.0, 1.0),
     Entry("beta", &MapSettings::beta, kMap, "Adaptive length factor beta")
         .range(kPositive).reconfigurable(0.01, 10.0),
