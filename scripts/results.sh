@@ -3,7 +3,7 @@
 # (every rule x evidence source x protocol on the bundled scans), results_ablation.md (kernel
 # ablations of the default), images/quality_learned.png, and the cross-dataset block,
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
-# cross_dataset.sh), results_vertical_support.md and results_ground_support.md
+# cross_dataset.sh), results_vertical_support.md, results_ground_support.md and results_sigma0.md
 # (scripts/calibration/across_datasets.sh).
 # Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
@@ -32,7 +32,7 @@ publish results_tables.md "Every rule, every evidence source, both protocols (bu
   "${out}/compare_all" "evidential_octomap compare --sources onehot,knn-vote,confusion,learned --variants dempster,sbki,ebs,reference_compat --protocols reconstruction,held-out"
 
 ablation="dempster,ebs,dempster:ds_multiplier=2,dempster:ds_multiplier=3,dempster:ds_multiplier=8"
-ablation+=",dempster:length_scale=0.25,dempster:length_scale=0.35,dempster:sigma0=0.7"
+ablation+=",dempster:length_scale=0.25,dempster:length_scale=0.35,dempster:sigma0=1"
 ablation+=",dempster:beta=0.5,dempster:downsampling=average,dempster:class_aware_support=true"
 "${cli}" compare "${kitti[@]}" --sources onehot,learned --protocols reconstruction,held-out \
   --no-rellis --variants "${ablation}" --out "${out}/ablation" --quiet > /dev/null
@@ -52,5 +52,9 @@ if [ "${CROSS:-1}" != 0 ]; then
     dempster:ground_vertical_support=1,dempster:ground_vertical_support=0.5,dempster \
     results_ground_support.md \
     "The support height of ground classes (ground_vertical_support) across datasets" \
+    "${out}/across_datasets"
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
+    dempster:sigma0=1,dempster:sigma0=0.85,dempster,dempster:sigma0=0.5,ebs results_sigma0.md \
+    "A point's reliability discount (the kernel amplitude sigma0) across datasets" \
     "${out}/across_datasets"
 fi
