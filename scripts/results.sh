@@ -3,8 +3,8 @@
 # (every rule x evidence source x protocol on the bundled scans), results_ablation.md (kernel
 # ablations of the default), images/quality_learned.png, and the cross-dataset block,
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
-# cross_dataset.sh), results_vertical_support.md, results_ground_support.md and results_sigma0.md
-# (scripts/calibration/across_datasets.sh).
+# cross_dataset.sh), results_vertical_support.md, results_ground_support.md, results_sigma0.md and
+# results_ds_multiplier.md (scripts/calibration/across_datasets.sh).
 # Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
 # CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
@@ -57,4 +57,7 @@ if [ "${CROSS:-1}" != 0 ]; then
     dempster:sigma0=1,dempster:sigma0=0.85,dempster,dempster:sigma0=0.5,ebs results_sigma0.md \
     "A point's reliability discount (the kernel amplitude sigma0) across datasets" \
     "${out}/across_datasets"
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
+    dempster,dempster:ds_multiplier=3,dempster:ds_multiplier=8 results_ds_multiplier.md \
+    "The count cap (ds_multiplier) across datasets" "${out}/across_datasets"
 fi
