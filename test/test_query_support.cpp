@@ -44,8 +44,9 @@ double supportLength() {
   return c.length_scale * c.beta * std::exp(1.0);
 }
 
-// The default kernel's weight at distance d from a point without uncertainty.
-double kernelAt(double d) { return sparseKernel(d, supportLength(), SemanticConfig().sigma0); }
+// The kernel's shape at distance d from a point without uncertainty (sigma0 is already in
+// the stored evidence, so the answer weighs by the shape alone).
+double kernelAt(double d) { return sparseKernel(d, supportLength(), 1.0); }
 
 void expectOpinionOf(const EvidentialOcTree& tree, const VoxelOpinion& got,
                      const std::vector<float>& payload) {
@@ -85,6 +86,20 @@ TEST_F(QuerySupport, KnownVoxelWithoutEvidenceAnswersTheDiscountedKernelMeanOfIt
   for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(got[c], expected[c], 1e-5) << c;
   expectOpinionOf(tree, tree.query(tree.keyToCoord(kCentre)), expected);
   EXPECT_EQ(tree.query(tree.keyToCoord(kCentre)).label, 0);  // the nearer voxel's class
+}
+
+TEST_F(QuerySupport, TheAnswerDoesNotDiscountAPointsReliabilityTwice) {
+  // The same stored evidence answers the same whatever sigma0 the map was made with: sigma0
+  // discounted each point where it was fused.
+  float reference[kClasses], got[kClasses];
+  ASSERT_TRUE(tree.answerPayload(kCentre, reference));
+  for (double sigma0 : {0.3, 0.7, 1.0}) {
+    SemanticConfig config = surfaceOnly();
+    config.sigma0 = sigma0;
+    tree.setConfig(config);
+    ASSERT_TRUE(tree.answerPayload(kCentre, got));
+    for (int c = 0; c < kClasses; ++c) EXPECT_EQ(got[c], reference[c]) << sigma0 << " " << c;
+  }
 }
 
 TEST_F(QuerySupport, AFlatterSupportReachesLessFarUp) {

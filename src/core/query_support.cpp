@@ -56,7 +56,9 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out)
         const auto weight = [&](double up) {
           const double d =
               kernelDistance(dx * resolution, dy * resolution, dz * resolution, half, up);
-          return std::min(1.0, sparseKernel(d, length, config_.sigma0));
+          // The kernel's shape only: the stored evidence already carries each point's
+          // reliability (sigma0), so weighing it by sigma0 again would discount it twice.
+          return sparseKernel(d, length, 1.0);
         };
         const double k_widest = weight(widest);
         if (!(k_widest > 0.0)) continue;
