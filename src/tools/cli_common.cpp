@@ -118,6 +118,8 @@ std::string variantName(const SemanticConfig& c) {
     if (c.adaptive_length && !c.reference_compat) v += " + adaptive length";
     if (c.uncertainty_threshold && !c.reference_compat) v += " + threshold";
     if (c.evidence_cap == 0.0) v += " w/o evidence cap";
+    if (c.sigma0 != SemanticConfig().sigma0 && !c.reference_compat)
+      v += " sigma0 " + std::to_string(c.sigma0).substr(0, 4);
     if (c.kernel_distance != SemanticConfig().kernel_distance)
       v += " kernel distance " + c.kernel_distance;
     if (c.vertical_support != SemanticConfig().vertical_support)
