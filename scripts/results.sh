@@ -33,7 +33,7 @@ publish results_tables.md "Every rule, every evidence source, both protocols (bu
 
 ablation="dempster,ebs,dempster:ds_multiplier=2,dempster:ds_multiplier=3,dempster:ds_multiplier=8"
 ablation+=",dempster:length_scale=0.25,dempster:length_scale=0.35,dempster:sigma0=1"
-ablation+=",dempster:beta=0.5,dempster:downsampling=average,dempster:class_aware_support=true"
+ablation+=",dempster:beta=0.5,dempster:downsampling=average,dempster:other_class_weight=1"
 "${cli}" compare "${kitti[@]}" --sources onehot,learned --protocols reconstruction,held-out \
   --no-rellis --variants "${ablation}" --out "${out}/ablation" --quiet > /dev/null
 publish results_ablation.md "Kernel and down-sampling ablations of the default (bundled data)" \
@@ -60,4 +60,9 @@ if [ "${CROSS:-1}" != 0 ]; then
   SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
     dempster,dempster:ds_multiplier=3,dempster:ds_multiplier=8 results_ds_multiplier.md \
     "The count cap (ds_multiplier) across datasets" "${out}/across_datasets"
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
+    dempster:other_class_weight=1,dempster,dempster:other_class_weight=0.5,dempster:other_class_weight=0 \
+    results_other_class_weight.md \
+    "A point's weight in voxels that hold other classes (other_class_weight) across datasets" \
+    "${out}/across_datasets"
 fi

@@ -69,14 +69,29 @@ std::map<KeyTuple, std::vector<double>> directEvaluation(
   const double resolution = tree.getResolution(), half = resolution / 2.0;
   const double epsilon = KernelTable::kMaxError * config.sigma0;
   std::map<KeyTuple, std::vector<double>> rows;
-  // class_aware_support: the classes (argmax) of the scan's points in each voxel.
-  std::map<KeyTuple, std::set<int>> classes_hit;
+  // other_class_weight: how many of the scan's points of each class (argmax) each voxel has,
+  // and the classes it holds (two of its points, or one and one in a neighbouring voxel).
+  std::map<KeyTuple, std::map<int, int>> classes_hit;
   for (size_t i = 0; i < scan.points_W.size(); ++i) {
     const float* e = &scan.evidence[i * num_classes];
     const int argmax = int(std::max_element(e, e + num_classes) - e);
     if (e[argmax] <= 0.0f) continue;
     const octomap::OcTreeKey key = tree.coordToKey(scan.points_W.getPoint(i));
-    classes_hit[KeyTuple{key[0], key[1], key[2]}].insert(argmax);
+    ++classes_hit[KeyTuple{key[0], key[1], key[2]}][argmax];
+  }
+  std::map<KeyTuple, std::set<int>> classes_held;
+  for (const auto& [voxel, counts] : classes_hit) {
+    for (const auto& [c, count] : counts) {
+      bool beside = false;
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dz = -1; dz <= 1; ++dz) {
+            const auto n = classes_hit.find(KeyTuple{
+                std::get<0>(voxel) + dx, std::get<1>(voxel) + dy, std::get<2>(voxel) + dz});
+            beside |= (dx || dy || dz) && n != classes_hit.end() && n->second.count(c);
+          }
+      if (count >= 2 || beside) classes_held[voxel].insert(c);
+    }
   }
   for (size_t i = 0; i < scan.points_W.size(); ++i) {
     const octomap::point3d& p = scan.points_W.getPoint(i);
@@ -112,14 +127,16 @@ std::map<KeyTuple, std::vector<double>> directEvaluation(
           gap[2] /= config.vertical_support;
           const double distance =
               std::sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]);
-          const double k = sparseKernel(distance, length, config.sigma0);
+          double k = sparseKernel(distance, length, config.sigma0);
           const bool near_edge = distance >= length * 0.999 && distance < length * 1.001;
           if (k <= 0.0 && !near_edge) continue;
           const KeyTuple key{voxel[0], voxel[1], voxel[2]};
-          const auto hit = classes_hit.find(key);
-          if (config.class_aware_support && o.argmax >= 0 && hit != classes_hit.end() &&
-              !hit->second.count(o.argmax))
-            continue;  // hit by this scan's points of other classes only
+          const auto held = classes_held.find(key);
+          if (o.argmax >= 0 && held != classes_held.end() &&
+              !classes_hit.at(key).count(o.argmax)) {
+            if (config.other_class_weight <= 0.0) continue;  // holds other classes only
+            k *= config.other_class_weight;
+          }
           auto& row = rows[key];
           auto& b = (*bound)[key];
           row.resize(num_classes, 0.0);
@@ -145,11 +162,13 @@ TEST(KernelPass, MapStaysWithinTheTableErrorOfDirectEvaluation) {
   const test::SyntheticScan scan = scene.defaultScan();
   for (const std::string& rule : kFusionRuleNames) {
     for (const std::string distance :
-         {"voxel", "centre", "voxel, class-aware", "voxel, vertical", "centre, vertical"}) {
+         {"voxel", "centre", "voxel, class-aware", "voxel, other classes half",
+          "voxel, vertical", "centre, vertical"}) {
       SemanticConfig config;
       config.rule = rule;
       config.kernel_distance = distance.substr(0, distance.find(','));
-      config.class_aware_support = distance.find("class-aware") != std::string::npos;
+      if (distance.find("class-aware") != std::string::npos) config.other_class_weight = 0.0;
+      if (distance.find("half") != std::string::npos) config.other_class_weight = 0.5;
       if (distance.find("vertical") != std::string::npos) config.vertical_support = 0.4;
       config.ds_multiplier = 0.0;            // every point, as the direct evaluation
       config.uncertainty_threshold = false;  // likewise
@@ -214,15 +233,39 @@ int lowPoleLabel(SemanticConfig config, const std::vector<bool>& ground = {}) {
   return tree.query(octomap::point3d(0.05f, 0.05f, 0.25f)).label;
 }
 
-// With the class-aware support the pole's voxels near the ground keep the pole's class, without
-// it the ground's many points outvote it.
+// When the ground's points stay out of the voxels the pole's points hold, the pole's voxels
+// near the ground keep the pole's class; at full weight the ground's many points outvote it.
 TEST(KernelPass, ClassAwareSupportKeepsAThinObjectsClass) {
-  for (bool class_aware : {false, true}) {
+  for (double weight : {1.0, 0.0}) {
     SemanticConfig config;
-    config.class_aware_support = class_aware;
+    config.other_class_weight = weight;
     const int low_pole = lowPoleLabel(config);
-    EXPECT_EQ(low_pole == kPole, class_aware) << "class-aware " << class_aware << ": label "
-                                              << low_pole;
+    EXPECT_EQ(low_pole == kPole, weight < 1.0) << "other_class_weight " << weight << ": label "
+                                               << low_pole;
+  }
+}
+
+// A class one point alone shows (a network's noise) does not keep its neighbours' evidence out
+// of its voxel; two points of it in neighbouring voxels (a thin object) do.
+TEST(KernelPass, ALonePointDoesNotHoldItsVoxelAgainstItsNeighbours) {
+  for (const std::vector<float>& heights : {std::vector<float>{0.3f}, {0.3f, 0.5f}}) {
+    octomap::Pointcloud points;
+    std::vector<float> evidence;
+    auto add = [&](float x, float y, float z, int label) {
+      points.push_back(x, y, z);
+      for (int c = 0; c < kPoleClasses; ++c) evidence.push_back(c == label ? 20.0f : 0.0f);
+    };
+    for (float x = -1.0f; x <= 1.0f; x += 0.04f)
+      for (float y = -1.0f; y <= 1.0f; y += 0.04f) add(x, y, 0.02f, kGround);
+    for (float z : heights) add(0.05f, 0.05f, z, kPole);
+    SemanticConfig config;
+    config.other_class_weight = 0.0;
+    config.ds_multiplier = 0.0;
+    config.threads = 2;
+    EvidentialOcTree tree(0.2, kPoleClasses, config);
+    tree.insertSemanticScan(points, evidence, octomap::point3d(3.0f, 0.0f, 1.5f));
+    const int label = tree.query(octomap::point3d(0.05f, 0.05f, 0.3f)).label;
+    EXPECT_EQ(label, heights.size() == 1 ? kGround : kPole) << heights.size() << " pole points";
   }
 }
 

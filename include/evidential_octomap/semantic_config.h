@@ -139,14 +139,17 @@ struct InsertSettings {
   // Sequential mapping only: a merge of chunk maps cannot apply one chunk's clearings to another
   // chunk's evidence, so batch mapping equals sequential mapping with this setting at 0.
   int clearing_observations = 0;
-  // Thin objects keep their class: a point's kernel support skips the voxels that this scan's
-  // points hit with other classes only (a voxel hit by no point of this scan, or by one of the
-  // point's class, still gets its evidence; a point always reaches its own voxel). Without it
-  // the many points of a road or a wall outvote the few of a person or a pole standing on it.
-  // Off by default: on the bundled scans it keeps more of the person class but reads a little
-  // less calibrated (docs/results_ablation.md).
-  // An insertion setting: not stored in the map.
-  bool class_aware_support = false;
+  // Thin objects keep their class: in a voxel that this scan's points show to hold other
+  // classes but not the point's own, a point's kernel weight is scaled by this (1: classes
+  // ignored; 0: the support stops there). A voxel holds a class when two of its points have it,
+  // or one of them and a point in a neighbouring voxel, so a lone mislabelled point does not
+  // hold its voxel against the evidence around it. A voxel hit by no point of this scan, or by
+  // one of the point's class, gets the full weight; a point always reaches its own voxel.
+  // At 1 the many points of a road or a wall outvote the few of a person or a pole standing on
+  // it. 0.75 is chosen across datasets (docs/results_other_class_weight.md); 0 stops the
+  // support but makes a map over-confident where the network is wrong. An insertion setting:
+  // not stored in the map.
+  double other_class_weight = 0.75;
   static constexpr int kMaxClearingObservations = 1000;
   // Evidence (sum over classes of payload - prior) below which a discounted payload is released.
   static constexpr double kReleasedEvidence = 0.01;

@@ -27,7 +27,7 @@ KernelPass::KernelPass(const SemanticConfig& config, const EvidentialOcTree& tre
       ground_vertical_support_(config.ground_vertical_support),
       uncertainty_kernel_(tree.rule().usesUncertaintyKernel()),
       to_cube_(config.kernel_distance == "voxel"),
-      class_aware_(config.class_aware_support),
+      other_class_weight_(config.other_class_weight),
       table_(config.sigma0) {}
 
 void KernelPass::preparePoints(const SemanticPoints& points, int threads,
@@ -83,24 +83,56 @@ void KernelPass::scatter(const KernelPoint& point, const octomap::point3d& posit
 
 static uint64_t classBit(int argmax) { return uint64_t(1) << (argmax & 63); }
 
+// The class arrays cover the subtree and a shell of one voxel around it, so that a voxel at
+// its face sees its neighbours in the next subtree: index of local voxel offsets in [-1, 64].
+constexpr int kPadded = (1 << kSubtreeLevels) + 2;
+static uint32_t paddedIndex(int x, int y, int z) {
+  return uint32_t(((z + 1) * kPadded + (y + 1)) * kPadded + (x + 1));
+}
+
 void KernelPass::markClasses(const KernelPoint& point, const octomap::OcTreeKey& base,
                              KernelRows* rows) const {
   if (point.opinion.argmax < 0) return;  // no evidence: no class to protect
   constexpr int kSize = 1 << kSubtreeLevels;
-  uint32_t local = 0;
-  for (int a = 2; a >= 0; --a) {
-    const int offset = int(point.key[a]) - int(base[a]);
-    if (offset < 0 || offset >= kSize) return;  // reaches this subtree from a neighbour
-    local = local << kSubtreeLevels | uint32_t(offset);
+  int offset[3];
+  for (int a = 0; a < 3; ++a) {
+    offset[a] = int(point.key[a]) - int(base[a]);
+    if (offset[a] < -1 || offset[a] > kSize) return;  // beyond the shell around the subtree
   }
-  if (rows->classes.empty()) rows->classes.resize(size_t(1) << (3 * kSubtreeLevels), 0);
+  const uint32_t local = paddedIndex(offset[0], offset[1], offset[2]);
+  if (rows->classes.empty()) {
+    rows->classes.resize(size_t(kPadded) * kPadded * kPadded, 0);
+    rows->classes_weaker.resize(rows->classes.size(), 0);
+  }
   uint64_t& seen = rows->classes[local];
   if (!seen) rows->classes_touched.push_back(local);
-  seen |= classBit(point.opinion.argmax);
+  const uint64_t bit = classBit(point.opinion.argmax);
+  rows->classes_weaker[local] |= seen & bit;  // its second point of this class: held
+  seen |= bit;
+}
+
+// A class one point alone shows is held only if a point beside it agrees: a lone point of
+// another class (a network's noise) does not keep its neighbours' evidence out, a thin object's
+// few points do. (Shell voxels see only part of their neighbours, but no point scatters there.)
+void KernelPass::holdClasses(KernelRows* rows) {
+  const std::vector<uint64_t>& seen = rows->classes;
+  for (uint32_t local : rows->classes_touched) {
+    const int x = int(local % kPadded), y = int(local / kPadded % kPadded),
+              z = int(local / (kPadded * kPadded));
+    uint64_t beside = 0;
+    for (int nz = std::max(z - 1, 0); nz <= std::min(z + 1, kPadded - 1); ++nz)
+      for (int ny = std::max(y - 1, 0); ny <= std::min(y + 1, kPadded - 1); ++ny)
+        for (int nx = std::max(x - 1, 0); nx <= std::min(x + 1, kPadded - 1); ++nx) {
+          const uint32_t n = uint32_t((nz * kPadded + ny) * kPadded + nx);
+          if (n != local) beside |= seen[n];
+        }
+    const bool holds = rows->classes_weaker[local] || (seen[local] & beside);
+    rows->classes_weaker[local] = holds ? ~seen[local] : 0;
+  }
 }
 
 void KernelPass::clearClasses(KernelRows* rows) {
-  for (uint32_t local : rows->classes_touched) rows->classes[local] = 0;
+  for (uint32_t local : rows->classes_touched) rows->classes[local] = rows->classes_weaker[local] = 0;
   rows->classes_touched.clear();
 }
 
@@ -161,10 +193,11 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
     }
   }
   const size_t width = size_t(Contribution::kRowWidth) * num_classes_;
-  // Voxels hit this scan only by other classes are skipped (none when not class-aware).
-  const bool skip_others = class_aware_ && !out->classes_touched.empty() &&
-                           point.opinion.argmax >= 0;
-  const uint64_t own_class = skip_others ? classBit(point.opinion.argmax) : 0;
+  // Voxels that hold other classes but not the point's get other_class_weight of its weight
+  // (none when not class-aware).
+  const bool weigh_others = other_class_weight_ < 1.0 && !out->classes_touched.empty() &&
+                            point.opinion.argmax >= 0;
+  const uint64_t own_class = weigh_others ? classBit(point.opinion.argmax) : 0;
   const int x0 = int(point.key[0]) - int(base[0]), y0 = int(point.key[1]) - int(base[1]),
             z0 = int(point.key[2]) - int(base[2]);
   const int reach_x = hi[0] - lo[0] + 1;
@@ -212,12 +245,15 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
         const int ox = __builtin_ctzll(voxels) - x0;
         voxels &= voxels - 1;
         const uint32_t local = line << kSubtreeLevels | uint32_t(x0 + ox);
-        if (skip_others) {
-          const uint64_t seen = out->classes[local];
-          if (seen && !(seen & own_class)) continue;
+        double weight = 1.0;
+        if (weigh_others) {
+          if (out->classes_weaker[paddedIndex(x0 + ox, y0 + oy, z0 + oz)] & own_class) {
+            if (other_class_weight_ <= 0.0) continue;
+            weight = other_class_weight_;
+          }
         }
         // Summed as (x + y) + z, whatever the loop order, so the rounding never depends on it.
-        const double k = table_((axis[0][ox] + axis[1][oy]) + sz);
+        const double k = weight * table_((axis[0][ox] + axis[1][oy]) + sz);
         if (k <= 0.0) continue;
         uint32_t& row = out->index[local];
         if (row == KernelRows::kNone) {

@@ -64,9 +64,13 @@ struct KernelRows {
   std::vector<uint32_t> touched;   // local voxels with a row, in row order
   std::vector<double> rows;        // while scattering: the contribution's row width, then C
   std::vector<double> axis_terms;  // per-axis d^2 terms of the point at hand
-  // SemanticConfig::class_aware_support: per local voxel, one bit per class (c mod 64) of this
-  // scan's points in it, 0 for a voxel no point hit; reset after use (classes_touched).
+  // SemanticConfig::other_class_weight < 1: per voxel of the subtree and of a one-voxel shell
+  // around it, one bit per class (c mod 64) of this scan's points in it (0 for a voxel no point
+  // hit), and the classes whose points weigh other_class_weight there: every class it has no
+  // point of, if it holds a class (two of its points, or one of them and a point in a
+  // neighbouring voxel), else none. Reset after use (classes_touched).
   std::vector<uint64_t> classes;
+  std::vector<uint64_t> classes_weaker;
   std::vector<uint32_t> classes_touched;
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
 };
@@ -86,11 +90,13 @@ class KernelPass {
   // After the last scatter into `rows`: C increments per row (KernelRows::rows), as the rule's
   // add() takes them.
   void finishRows(KernelRows* rows) const;
-  // SemanticConfig::class_aware_support: KernelRows::classes of the points that lie in the
-  // subtree at `base` (before its scatters), and their reset (after).
-  bool classAware() const { return class_aware_; }
+  // SemanticConfig::other_class_weight < 1: the classes of the points that lie in the subtree
+  // at `base` (markClasses for each, then holdClasses, before its scatters), and their reset
+  // (after).
+  bool classAware() const { return other_class_weight_ < 1.0; }
   void markClasses(const KernelPoint& point, const octomap::OcTreeKey& base,
                    KernelRows* rows) const;
+  static void holdClasses(KernelRows* rows);
   static void clearClasses(KernelRows* rows);
 
  private:
@@ -109,7 +115,7 @@ class KernelPass {
   double ground_vertical_support_;
   bool uncertainty_kernel_;
   bool to_cube_;
-  bool class_aware_;
+  double other_class_weight_;
   KernelTable table_;
 };
 

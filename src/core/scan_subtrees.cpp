@@ -206,6 +206,7 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
   const bool class_aware = kernel_->classAware();
   for (size_t p = range.first_point; class_aware && p < range.last_point; ++p)
     kernel_->markClasses((*kernel_points_)[point_subtrees_[p].second], base, &kernel);
+  if (class_aware) KernelPass::holdClasses(&kernel);
   for (size_t p = range.first_point; p < range.last_point; ++p) {
     const uint32_t j = point_subtrees_[p].second;
     kernel_->scatter((*kernel_points_)[j], points_->positions[j], base, &kernel);

@@ -133,9 +133,11 @@ std::vector<Setting> makeList() {
           "moving objects leave no ghosts (0: off; sequential mapping only)")
         .range({0.0, double(InsertSettings::kMaxClearingObservations), false, false, kNaN,
                 "in [0, 1000] (0: off)"}),
-    Entry("class_aware_support", &InsertSettings::class_aware_support, kInsert,
-          "A point's kernel support skips voxels this scan's points hit with other classes only "
-          "(thin objects keep their class)"),
+    Entry("other_class_weight", &InsertSettings::other_class_weight, kInsert,
+          "A point's kernel weight in voxels that this scan's points show to hold other classes "
+          "and not the point's (1: classes ignored; 0: the support stops there), so thin objects "
+          "keep their class")
+        .range({0.0, 1.0, false, false, kNaN, "in [0, 1]"}),
     Entry("threads", &InsertSettings::threads, kInsert,
           "Threads of the semantic pass (0: OpenMP default)")
         .range({0.0, double(SemanticConfig::kMaxThreads), false, false, kNaN,

@@ -128,6 +128,8 @@ std::string variantName(const SemanticConfig& c) {
       v += " ground support " + std::to_string(c.ground_vertical_support).substr(0, 4);
     if (c.downsampling != SemanticConfig().downsampling && !c.reference_compat)
       v += " " + c.downsampling;
+    if (c.other_class_weight != SemanticConfig().other_class_weight)
+      v += " other-class weight " + std::to_string(c.other_class_weight).substr(0, 4);
   }
   return v;
 }

@@ -9,9 +9,13 @@ namespace evidential_octomap::tools {
 
 namespace {
 
-// The published methods are compared with their own kernel amplitude, not the default's
-// reliability discount (a named variant's overrides can still change it).
-constexpr double kPublishedSigma0 = 1.0;
+// The published methods are compared with their own kernel: amplitude 1 and no class
+// awareness, not the default's reliability discount and other-class weight (a named variant's
+// overrides can still change them).
+void publishedKernel(SemanticConfig* c) {
+  c->sigma0 = 1.0;
+  c->other_class_weight = 1.0;
+}
 
 // The paper's Table II rows are named relative to the paper's method (adaptive length and
 // threshold both on), whatever the defaults: dempster-no-both is the default's kernel.
@@ -44,10 +48,10 @@ SemanticConfig namedVariantConfig(const std::string& v, SemanticConfig c) {
     c.rule = "dempster";
     c.reference_compat = true;
     c.evidence_cap = 0.0;
-    c.sigma0 = kPublishedSigma0;
+    publishedKernel(&c);
   } else if (v == "sbki" || v == "ebs") {
     c.rule = v;
-    c.sigma0 = kPublishedSigma0;
+    publishedKernel(&c);
   } else {
     throw std::invalid_argument("unknown variant '" + v + "'");
   }

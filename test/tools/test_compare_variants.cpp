@@ -9,13 +9,18 @@
 namespace eo = evidential_octomap;
 using eo::tools::variantConfig;
 
-TEST(CompareVariants, PublishedRulesUseTheirOwnAmplitude) {
+TEST(CompareVariants, PublishedRulesUseTheirOwnKernel) {
   eo::SemanticConfig base;
   base.sigma0 = 0.4;
-  for (const char* name : {"sbki", "ebs", "reference_compat"})
+  base.other_class_weight = 0.3;
+  for (const char* name : {"sbki", "ebs", "reference_compat"}) {
     EXPECT_EQ(variantConfig(name, base).sigma0, 1.0) << name;
-  EXPECT_EQ(variantConfig("dempster", base).sigma0, 0.4);
-  EXPECT_EQ(variantConfig("dempster-paper", base).sigma0, 0.4);
+    EXPECT_EQ(variantConfig(name, base).other_class_weight, 1.0) << name;
+  }
+  for (const char* name : {"dempster", "dempster-paper"}) {
+    EXPECT_EQ(variantConfig(name, base).sigma0, 0.4) << name;
+    EXPECT_EQ(variantConfig(name, base).other_class_weight, 0.3) << name;
+  }
 }
 
 TEST(CompareVariants, OverridesApplyAfterTheNamedVariant) {
