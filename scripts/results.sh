@@ -3,8 +3,9 @@
 # (every rule x evidence source x protocol on the bundled scans), results_ablation.md (kernel
 # ablations of the default), images/quality_learned.png, and the cross-dataset block,
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
-# cross_dataset.sh), results_vertical_support.md, results_ground_support.md, results_sigma0.md and
-# results_ds_multiplier.md (scripts/calibration/across_datasets.sh).
+# cross_dataset.sh), results_vertical_support.md, results_ground_support.md, results_sigma0.md,
+# results_ds_multiplier.md and results_other_class_weight.md (scripts/calibration/
+# across_datasets.sh).
 # Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
 # CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
