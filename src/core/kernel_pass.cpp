@@ -132,7 +132,10 @@ void KernelPass::holdClasses(KernelRows* rows) {
 }
 
 void KernelPass::clearClasses(KernelRows* rows) {
-  for (uint32_t local : rows->classes_touched) rows->classes[local] = rows->classes_weaker[local] = 0;
+  for (uint32_t local : rows->classes_touched) {
+    rows->classes[local] = 0;
+    rows->classes_weaker[local] = 0;
+  }
   rows->classes_touched.clear();
 }
 
@@ -195,8 +198,8 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
   const size_t width = size_t(Contribution::kRowWidth) * num_classes_;
   // Voxels that hold other classes but not the point's get other_class_weight of its weight
   // (none when not class-aware).
-  const bool weigh_others = other_class_weight_ < 1.0 && !out->classes_touched.empty() &&
-                            point.opinion.argmax >= 0;
+  const bool weigh_others =
+      other_class_weight_ < 1.0 && !out->classes_touched.empty() && point.opinion.argmax >= 0;
   const uint64_t own_class = weigh_others ? classBit(point.opinion.argmax) : 0;
   const int x0 = int(point.key[0]) - int(base[0]), y0 = int(point.key[1]) - int(base[1]),
             z0 = int(point.key[2]) - int(base[2]);
