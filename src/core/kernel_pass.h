@@ -68,7 +68,8 @@ struct KernelRows {
   // around it, one bit per class (c mod 64) of this scan's points in it (0 for a voxel no point
   // hit), and the classes whose points weigh other_class_weight there: every class it has no
   // point of, if it holds a class (two of its points, or one of them and a point in a
-  // neighbouring voxel), else none. Reset after use (classes_touched).
+  // neighbouring voxel), else none; while marking, the classes it has two points of. Reset
+  // after use (classes_touched).
   std::vector<uint64_t> classes;
   std::vector<uint64_t> classes_weaker;
   std::vector<uint32_t> classes_touched;
