@@ -66,6 +66,10 @@ void fillTreeStats(const EvidentialOcTree& tree, RunReport* r) {
   r->leaves = tree.getNumLeafNodes();
   r->semantic_nodes = tree.numSemanticNodes();
   r->memory_bytes = tree.memoryUsage();
+  r->mean_point_log_evidence = tree.meanPointLogEvidence();
+  // Only dempster reads its evidence with a cap.
+  r->evidence_cap =
+      tree.rule().type() == FusionRuleType::kDempster ? tree.effectiveEvidenceCap() : NAN;
 }
 
 std::string fixed(double value, int decimals) {
@@ -171,8 +175,11 @@ nlohmann::json toJson(const RunReport& r, const ClassTable& classes) {
                  {"semantic_points", r.totals.semantic_points},
                  {"points_dropped_uncertain", r.totals.points_dropped_uncertain},
                  {"voxels_updated", r.totals.voxels_updated}};
-  j["tree"] = {
-      {"leaves", r.leaves}, {"semantic_nodes", r.semantic_nodes}, {"memory_bytes", r.memory_bytes}};
+  j["tree"] = {{"leaves", r.leaves},
+               {"semantic_nodes", r.semantic_nodes},
+               {"memory_bytes", r.memory_bytes},
+               {"mean_point_log_evidence", r.mean_point_log_evidence},
+               {"evidence_cap", num(r.evidence_cap)}};
   return j;
 }
 

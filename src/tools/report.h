@@ -3,38 +3,39 @@
 // predictions are synthetic.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "evidential_octomap/class_table.h"
-#include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/evaluation/metrics.h"
+#include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/semantic_config.h"
 
 namespace evidential_octomap::tools {
 
 struct RunReport {
-  std::string dataset;                   // path given on the command line
-  std::string protocol;                  // reconstruction | held-out
-  std::vector<std::string> map_scans;    // scan names mapped
-  std::vector<std::string> query_scans;  // scan names queried
-  std::string variant;                   // e.g. "dempster", "dempster w/o adaptive length"
-  std::string evidence_source;           // file | onehot | knn-vote | confusion | unknown
-  std::string evidence_description;      // describeEvidence()
-  bool evidence_derived = true;          // derived from hard labels
+  std::string dataset;                    // path given on the command line
+  std::string protocol;                   // reconstruction | held-out
+  std::vector<std::string> map_scans;     // scan names mapped
+  std::vector<std::string> query_scans;   // scan names queried
+  std::string variant;                    // e.g. "dempster", "dempster w/o adaptive length"
+  std::string evidence_source;            // file | onehot | knn-vote | confusion | unknown
+  std::string evidence_description;       // describeEvidence()
+  bool evidence_derived = true;           // derived from hard labels
   std::string evidence_kind = "derived";  // evidenceKind(): derived | learned (cross-fitted) | ..
-  std::string predictions_note;          // e.g. synthetic noise model; empty for real ones
+  std::string predictions_note;           // e.g. synthetic noise model; empty for real ones
   SemanticConfig config;
   double resolution = 0.2;
   MapMetrics map;
-  QualityMetrics input;                  // the input's per-point answers on the same queries
-  std::string input_description;        // e.g. "input evidence (onehot, E=20), per point"
+  QualityMetrics input;                      // the input's per-point answers on the same queries
+  std::string input_description;             // e.g. "input evidence (onehot, E=20), per point"
   long long occupied_without_endpoint = -1;  // -1: not measured (e.g. eval of a saved map)
   std::vector<double> ms_per_scan;
   InsertStats totals;
   size_t leaves = 0, semantic_nodes = 0, memory_bytes = 0;
+  double mean_point_log_evidence = 0.0;  // m, which the adaptive cap follows
+  double evidence_cap = 0.0;  // dempster's read-out cap in use (0: none; NaN: other rule)
 };
 
 // Every SemanticConfig field, parsed from SemanticConfig::print (so new fields appear too).
@@ -43,7 +44,7 @@ nlohmann::json configJson(const SemanticConfig& config);
 nlohmann::json qualityJson(const QualityMetrics& q);
 nlohmann::json toJson(const RunReport& report, const ClassTable& classes);
 std::string toMarkdown(const RunReport& report, const ClassTable& classes);
-// Fills leaves / semantic_nodes / memory_bytes from the tree.
+// Fills leaves / semantic_nodes / memory_bytes and the read-out cap with its m from the tree.
 void fillTreeStats(const EvidentialOcTree& tree, RunReport* report);
 
 // Writes text to a file; throws std::runtime_error naming the path.

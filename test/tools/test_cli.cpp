@@ -198,6 +198,12 @@ TEST_F(CliEndToEnd, MetricsEqualAnIndependentComputation) {
   EXPECT_NEAR(double(j["map"]["acc_all_queries"]), double(ind.correct) / ind.queries, 1e-12);
   EXPECT_NEAR(double(j["map"]["miou_all_queries"]), ind.miou_all, 1e-12);
   EXPECT_NEAR(double(j["map"]["brier"]), ind.brier, 1e-6);
+  // The read-out cap the metrics were computed with: the adaptive cap of the saved map's m.
+  const double m = tree->meanPointLogEvidence();
+  EXPECT_GT(m, 0.0);
+  EXPECT_DOUBLE_EQ(double(j["tree"]["mean_point_log_evidence"]), m);
+  EXPECT_DOUBLE_EQ(double(j["tree"]["evidence_cap"]),
+                   evidential_octomap::SemanticConfig::adaptiveEvidenceCap(m));
 }
 
 TEST_F(CliEndToEnd, InfoReadsTheMapBack) {
@@ -248,6 +254,7 @@ TEST_F(CliEndToEnd, EvalWithAnotherEvidenceCapChangesOnlyTheReadOut) {
   for (const char* k : {"labelled", "semantic_coverage", "acc_all_queries", "miou_all_queries"}) {
     EXPECT_EQ(a["map"][k], b["map"][k]) << k;
   }
+  EXPECT_EQ(double(b["tree"]["evidence_cap"]), 0.0);
 }
 
 TEST_F(CliEndToEnd, ExportAndMergeWriteReadableMaps) {
@@ -319,8 +326,7 @@ TEST_F(CliEndToEnd, MapAutosaveEveryNScansHoldsTheMapOfThoseScans) {
   EXPECT_EQ(autosave->numSemanticNodes(), two_scans->numSemanticNodes());
   EXPECT_NE(autosave->getNumLeafNodes(), three_scans->getNumLeafNodes());
   for (const auto& e : fs::directory_iterator(out)) {
-    EXPECT_EQ(e.path().filename().string().find(".evidential-tmp."), std::string::npos)
-        << e.path();
+    EXPECT_EQ(e.path().filename().string().find(".evidential-tmp."), std::string::npos) << e.path();
   }
 }
 
@@ -380,9 +386,10 @@ TEST(CliCompare, VariantOverridesMakeAnAblationRow) {
 // its interval; the voxel-majority reference rows are among them.
 TEST(CliCompare, BootstrapEntriesMatchTheRunsDifferences) {
   const std::string dir = freshDir("cli_compare_bootstrap");
-  const Result r = run("compare -q --no-rellis --scans 1 --sources onehot --protocols "
-                       "reconstruction --variants dempster,ebs --bootstrap-replicates 200 --data " +
-                       kittiDir() + " --classes " + kittiClasses() + " --out " + dir);
+  const Result r =
+      run("compare -q --no-rellis --scans 1 --sources onehot --protocols "
+          "reconstruction --variants dempster,ebs --bootstrap-replicates 200 --data " +
+          kittiDir() + " --classes " + kittiClasses() + " --out " + dir);
   ASSERT_EQ(r.status, 0) << r.output;
   const auto all = readJson(dir + "/compare.json");
   const auto& runs = all["runs"];
