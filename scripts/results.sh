@@ -4,8 +4,8 @@
 # ablations of the default), images/quality_learned.png, and the cross-dataset block,
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
 # cross_dataset.sh), results_vertical_support.md, results_ground_support.md, results_sigma0.md,
-# results_ds_multiplier.md and results_other_class_weight.md (scripts/calibration/
-# across_datasets.sh).
+# results_ds_multiplier.md, results_other_class_weight.md and results_evidence_cap.md
+# (scripts/calibration/across_datasets.sh).
 # Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
 # CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
@@ -65,5 +65,10 @@ if [ "${CROSS:-1}" != 0 ]; then
     dempster:other_class_weight=1,dempster,dempster:other_class_weight=0.5,dempster:other_class_weight=0 \
     results_other_class_weight.md \
     "A point's weight in voxels that hold other classes (other_class_weight) across datasets" \
+    "${out}/across_datasets"
+  caps=dempster
+  for cap in 2.5 3 4 5 6 8 10; do caps+=",dempster:evidence_cap=${cap}"; done
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" "${caps}" \
+    results_evidence_cap.md "The read-out cap across datasets: adaptive against fixed" \
     "${out}/across_datasets"
 fi

@@ -4,7 +4,7 @@
     across_datasets.py OUT PAGE TITLE COMMAND
 
 Reads OUT/compare_*/compare.json (written by across_datasets.sh) and writes PAGE: per dataset,
-protocol and evidence, each variant's Brier score and ECE, the AUROC of 1 - max p for the
+protocol and evidence, each variant's Brier score, ECE and read-out cap, the AUROC of 1 - max p for the
 voxel's errors, mIoU over all queries, the paired-bootstrap difference to `dempster` (the
 default) and the classes with >= 1,000 GT queries below the input's IoU (reconstruction); then
 the leave-one-dataset-out choice: for each dataset, the variant with the lowest mean Brier
@@ -52,10 +52,18 @@ def interval(b, key, scale, digits):
                                                scale * x["upper"])
 
 
+def readout_cap(run):
+    """dempster's read-out cap and, in brackets, the map's m that the adaptive cap follows."""
+    tree = run["tree"]
+    if tree.get("evidence_cap") is None:
+        return "–"
+    return "%.2f (%.2f)" % (tree["evidence_cap"], tree["mean_point_log_evidence"])
+
+
 def section_table(runs, boot, variants):
     lines = ["| dataset | protocol | evidence | variant | Brier | Δ Brier vs dempster | ECE | "
-             "AUROC 1 − max p | mIoU all % | Δ mIoU vs dempster (points) | classes below input "
-             "IoU | kernel CPU s |", "|" + "---|" * 12]
+             "cap (m) | AUROC 1 − max p | mIoU all % | Δ mIoU vs dempster (points) | classes "
+             "below input IoU | kernel CPU s |", "|" + "---|" * 13]
     for key in sorted(runs):
         for v in variants:
             r = runs[key].get(v)
@@ -63,9 +71,9 @@ def section_table(runs, boot, variants):
                 continue
             m = r["map"]
             b = None if v == DEFAULT else boot.get(key + (v,))
-            lines.append("| %s | %s | %s | `%s` | %.4f | %s | %.3f | %.3f | %.2f | %s | %s | %.1f |" % (
+            lines.append("| %s | %s | %s | `%s` | %.4f | %s | %.3f | %s | %.3f | %.2f | %s | %s | %.1f |" % (
                 key[0], key[1], key[2], v, m["brier"], interval(b, "brier_difference", 1, 4),
-                m["ece"], m["error_detection"]["1-max_p"]["auroc"],
+                m["ece"], readout_cap(r), m["error_detection"]["1-max_p"]["auroc"],
                 100 * m["miou_all_queries"], interval(b, "miou_all_difference", 100, 2),
                 thin_classes_below_input(r), r["timing"]["cpu_ms_kernel_total"] / 1000))
     return lines
@@ -120,7 +128,9 @@ def main():
             "scans (learned and derived one-hot evidence), the RELLIS-3D scan (synthetic "
             "predictions) and four **synthetic** generated sequences; every variant of a "
             "section answers the same queries. Δ: paired bootstrap against `dempster` (the "
-            "default), 95 %% interval over 10 m blocks. Classes below the input: classes with "
+            "default), 95 %% interval over 10 m blocks. cap (m): the read-out cap of a dempster map and "
+            "the mean point log-evidence m of its evidence ([calibration.md](calibration.md)). "
+            "Classes below the input: classes with "
             "≥ 1,000 GT queries whose map IoU is below the per-point input's (reconstruction)."
             % (command, commit, stamp), ""]
     text += section_table(runs, boot, variants)
