@@ -5,7 +5,7 @@
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
 # cross_dataset.sh), results_vertical_support.md, results_ground_support.md, results_sigma0.md,
 # results_ds_multiplier.md, results_other_class_weight.md and results_evidence_cap.md
-# (scripts/calibration/across_datasets.sh).
+# (scripts/calibration/across_datasets.sh), results_calibrate.md (calibrate_transfer.sh).
 # Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
 # CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
@@ -70,5 +70,7 @@ if [ "${CROSS:-1}" != 0 ]; then
   for cap in 2.5 3 4 5 6 8 10; do caps+=",dempster:evidence_cap=${cap}"; done
   SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" "${caps}" \
     results_evidence_cap.md "The read-out cap across datasets: adaptive against fixed" \
+    "${out}/across_datasets"
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/calibrate_transfer.sh" \
     "${out}/across_datasets"
 fi
