@@ -4,8 +4,9 @@
 # ablations of the default), images/quality_learned.png, and the cross-dataset block,
 # calibration_tables.md and images/reliability_cross_dataset.png (scripts/calibration/
 # cross_dataset.sh), results_vertical_support.md, results_ground_support.md, results_sigma0.md,
-# results_ds_multiplier.md, results_other_class_weight.md and results_evidence_cap.md
-# (scripts/calibration/across_datasets.sh), results_calibrate.md (calibrate_transfer.sh).
+# results_ds_multiplier.md, results_other_class_weight.md, results_length_scale.md and
+# results_evidence_cap.md (scripts/calibration/across_datasets.sh), results_calibrate.md
+# (calibrate_transfer.sh).
 # Each page is stamped with the commit and date.
 #   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
 # CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
@@ -65,6 +66,10 @@ if [ "${CROSS:-1}" != 0 ]; then
     dempster:other_class_weight=1,dempster,dempster:other_class_weight=0.5,dempster:other_class_weight=0 \
     results_other_class_weight.md \
     "A point's weight in voxels that hold other classes (other_class_weight) across datasets" \
+    "${out}/across_datasets"
+  SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
+    dempster,dempster:length_scale=0.35,dempster:length_scale=0.4,dempster:length_scale=0.45,ebs,ebs:length_scale=0.35 \
+    results_length_scale.md "The kernel length scale (length_scale) across datasets" \
     "${out}/across_datasets"
   caps=dempster
   for cap in 2.5 3 4 5 6 8 10; do caps+=",dempster:evidence_cap=${cap}"; done
