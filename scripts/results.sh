@@ -8,7 +8,7 @@
 # results_evidence_cap.md (scripts/calibration/across_datasets.sh), results_calibrate.md
 # (calibrate_transfer.sh).
 # Each page is stamped with the commit and date.
-#   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1 h on 2 cores)
+#   bash scripts/results.sh [OUT_DIR]      (default out/results; ~1.5 h on 2 cores)
 # CROSS=0 skips the cross-dataset part (scripts/calibration/cross_dataset.sh).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -68,7 +68,8 @@ if [ "${CROSS:-1}" != 0 ]; then
     "A point's weight in voxels that hold other classes (other_class_weight) across datasets" \
     "${out}/across_datasets"
   SCANS="${SCANS:-24}" bash "${root}/scripts/calibration/across_datasets.sh" \
-    dempster,dempster:length_scale=0.35,dempster:length_scale=0.4,dempster:length_scale=0.45,ebs,ebs:length_scale=0.35 \
+    dempster,dempster:length_scale=0.35,dempster:length_scale=0.4,dempster:length_scale=0.45,ebs,\
+ebs:length_scale=0.35 \
     results_length_scale.md "The kernel length scale (length_scale) across datasets" \
     "${out}/across_datasets"
   caps=dempster

@@ -4,8 +4,8 @@
     across_datasets.py OUT PAGE TITLE COMMAND
 
 Reads OUT/compare_*/compare.json (written by across_datasets.sh) and writes PAGE: per dataset,
-protocol and evidence, each variant's Brier score, ECE and read-out cap, the AUROC of 1 - max p for the
-voxel's errors, mIoU over all queries, the paired-bootstrap difference to `dempster` (the
+protocol and evidence, each variant's Brier score, ECE and read-out cap, the AUROC of 1 - max p
+for the voxel's errors, mIoU over all queries, the paired-bootstrap difference to `dempster` (the
 default) and the classes with >= 1,000 GT queries below the input's IoU (reconstruction); then
 the leave-one-dataset-out choice: for each dataset, the variant with the lowest mean Brier
 relative to the best variant of each section, over the *other* datasets' sections.
@@ -71,7 +71,8 @@ def section_table(runs, boot, variants):
                 continue
             m = r["map"]
             b = None if v == DEFAULT else boot.get(key + (v,))
-            lines.append("| %s | %s | %s | `%s` | %.4f | %s | %.3f | %s | %.3f | %.2f | %s | %s | %.1f |" % (
+            lines.append("| %s | %s | %s | `%s` | %.4f | %s | %.3f | %s | %.3f | %.2f | %s | %s "
+                         "| %.1f |" % (
                 key[0], key[1], key[2], v, m["brier"], interval(b, "brier_difference", 1, 4),
                 m["ece"], readout_cap(r), m["error_detection"]["1-max_p"]["auroc"],
                 100 * m["miou_all_queries"], interval(b, "miou_all_difference", 100, 2),
@@ -128,9 +129,9 @@ def main():
             "scans (learned and derived one-hot evidence), the RELLIS-3D scan (synthetic "
             "predictions) and four **synthetic** generated sequences; every variant of a "
             "section answers the same queries. Δ: paired bootstrap against `dempster` (the "
-            "default), 95 %% interval over 10 m blocks. cap (m): the read-out cap of a dempster map and "
-            "the mean point log-evidence m of its evidence ([calibration.md](calibration.md)). "
-            "Classes below the input: classes with "
+            "default), 95 %% interval over 10 m blocks. cap (m): the read-out cap of a dempster "
+            "map and the mean point log-evidence m of its evidence "
+            "([calibration.md](calibration.md)). Classes below the input: classes with "
             "≥ 1,000 GT queries whose map IoU is below the per-point input's (reconstruction)."
             % (command, commit, stamp), ""]
     text += section_table(runs, boot, variants)

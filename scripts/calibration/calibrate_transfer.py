@@ -48,8 +48,8 @@ def row(key, adaptive, fitted, boot):
     if boot is not None:
         x = boot["brier_difference"]
         diff = "%+.4f [%+.4f, %+.4f]" % (x["estimate"], x["lower"], x["upper"])
-    return "| %s | %s | %s | %s | %.2f (m %.2f) → %.2f | %.4f → %.4f | %s | %.3f → %.3f | " \
-        "%.3f → %.3f |" % (
+    return "| %s | %s | %s | %s | %.2f (m %.2f) → %.2f | %.4f → %.4f | %s | %.3f → %.3f " \
+        "| %.3f → %.3f |" % (
             key[0], key[1], key[2], validation_split(adaptive), adaptive["tree"]["evidence_cap"],
             adaptive["tree"]["mean_point_log_evidence"], fitted["tree"]["evidence_cap"],
             a["brier"], f["brier"], diff, a["ece"], f["ece"],
@@ -70,9 +70,10 @@ def main():
             "scored. Generated datasets (**synthetic**): the sequences of the cross-dataset "
             "table ([calibration_tables.md](calibration_tables.md)), calibrated on a shorter "
             "sequence of the same kind with another seed. Bundled SemanticKITTI scans: "
-            "calibrated on the held-out protocol's mapped scans, scored on its queries (the other "
-            "scans). Cap: the adaptive cap with the map's m → the fitted one. Δ Brier: the fitted "
-            "cap's minus the adaptive cap's, paired bootstrap, 95 %% interval over 10 m blocks."
+            "calibrated on the held-out protocol's mapped scans, scored on its queries (the "
+            "other scans). Cap: the adaptive cap with the map's m → the fitted one. Δ Brier: the "
+            "fitted cap's minus the adaptive cap's, paired bootstrap, 95 %% interval over 10 m "
+            "blocks."
             % (command, commit, stamp), "",
             "| dataset | protocol | evidence | validation split | cap | Brier | Δ Brier | ECE | "
             "AUROC 1 − max p |", "|" + "---|" * 9]

@@ -6,7 +6,8 @@
 # bundled scans are calibrated on their first half, the held-out protocol's mapped scans, and
 # scored on the held-out queries (the second half). Writes docs/PAGE (default
 # results_calibrate.md).
-#   bash scripts/calibration/calibrate_transfer.sh [OUT_DIR] [PAGE]   (SCANS=24, SCANS_VALIDATION=8)
+#   bash scripts/calibration/calibrate_transfer.sh [OUT_DIR] [PAGE]
+#   (SCANS=24, SCANS_VALIDATION=8)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 out="${1:-${root}/out/across_datasets}"
@@ -29,9 +30,10 @@ for spec in "${GENERATED_SPECS[@]}"; do
     --out "${validation}" -q ${args/--seed ${seed}/--seed $((seed + 100))}
   "${cli}" calibrate --data "${validation}" --classes "${validation}/classes.yaml" \
     --evidence file --out "${out}/calibrate/${name}.yaml" -q > /dev/null
+  fitted="dempster:evidence_cap=$(cap_of "${out}/calibrate/${name}.yaml")"
   "${cli}" compare --data "${out}/${name}" --classes "${out}/${name}/classes.yaml" --no-rellis \
-    --sources file --variants "dempster,dempster:evidence_cap=$(cap_of "${out}/calibrate/${name}.yaml")" \
-    --protocols reconstruction,held-out --out "${out}/calibrate/compare_${name}" --quiet > /dev/null
+    --sources file --variants "dempster,${fitted}" --protocols reconstruction,held-out \
+    --out "${out}/calibrate/compare_${name}" --quiet > /dev/null
 done
 
 kitti=(--data "${root}/data/semantickitti_08_first10"
@@ -39,10 +41,13 @@ kitti=(--data "${root}/data/semantickitti_08_first10"
 for evidence in learned onehot; do
   "${cli}" calibrate "${kitti[@]}" --scans 5 --evidence "${evidence}" \
     --out "${out}/calibrate/bundled_${evidence}.yaml" -q > /dev/null
+  fitted="dempster:evidence_cap=$(cap_of "${out}/calibrate/bundled_${evidence}.yaml")"
   "${cli}" compare "${kitti[@]}" --no-rellis --sources "${evidence}" --protocols held-out \
-    --variants "dempster,dempster:evidence_cap=$(cap_of "${out}/calibrate/bundled_${evidence}.yaml")" \
+    --variants "dempster,${fitted}" \
     --out "${out}/calibrate/compare_bundled_${evidence}" --quiet > /dev/null
 done
 
 /usr/bin/python3 "${root}/scripts/calibration/calibrate_transfer.py" "${out}/calibrate" \
-  "${root}/docs/${page}" "SCANS=${scans} SCANS_VALIDATION=${validation_scans} bash scripts/calibration/calibrate_transfer.sh"
+  "${root}/docs/${page}" \
+  "SCANS=${scans} SCANS_VALIDATION=${validation_scans} bash \
+scripts/calibration/calibrate_transfer.sh"
