@@ -113,6 +113,20 @@ nlohmann::json qualityJson(const QualityMetrics& q) {
           {"reliability", reliability}};
 }
 
+namespace {
+// Rows: GT classes 0..C-1; columns: the predicted classes 0..C-1, then "no label".
+nlohmann::json confusionJson(const ConfusionMatrix& m) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (int gt = 0; gt < m.numClasses(); ++gt) {
+    std::vector<uint64_t> row;
+    for (int p = -1; p < m.numClasses(); ++p) row.push_back(m.at(gt, p));
+    std::rotate(row.begin(), row.begin() + 1, row.end());  // the no-label column last
+    rows.push_back(row);
+  }
+  return rows;
+}
+}  // namespace
+
 nlohmann::json toJson(const RunReport& r, const ClassTable& classes) {
   using nlohmann::json;
   const int C = classes.numClasses();
@@ -148,6 +162,10 @@ nlohmann::json toJson(const RunReport& r, const ClassTable& classes) {
   j["parameters_text"] = printed.str();
   j["metric_definitions"] = "include/evidential_octomap/evaluation/metrics.h";
   j["map"] = qualityJson(mq);
+  j["confusion"] = {{"rows", "GT class"},
+                    {"columns", "predicted class, then no label"},
+                    {"map", confusionJson(mq.all)},
+                    {"input", confusionJson(r.input.all)}};
   j["map"]["occupied"] = r.map.occupied;
   j["map"]["semantic_coverage"] = num(r.map.semantic_coverage);
   j["map"]["occupancy_coverage"] = num(r.map.occupancy_coverage);

@@ -67,6 +67,7 @@ struct Independent {
   size_t queries = 0, labelled = 0, occupied = 0, correct = 0;
   double brier = 0.0;
   double miou_all = 0.0;
+  std::vector<std::vector<size_t>> confusion;  // GT x (predicted, then no label)
 };
 
 Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
@@ -78,6 +79,7 @@ Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
   const int C = classes.numClasses();
   std::vector<size_t> tp(C, 0), fp(C, 0), fn(C, 0);
   Independent r;
+  r.confusion.assign(C, std::vector<size_t>(C + 1, 0));
   for (const char* name : {"000000", "000001"}) {
     std::getline(poses, line);
     const Eigen::Matrix4d T = Tr.inverse() * parse3x4(line) * Tr;
@@ -108,6 +110,7 @@ Independent recompute(const EvidentialOcTree& tree, const ClassTable& classes) {
       }
       for (int c = 0; c < C; ++c) r.brier += double((prob[c] - (c == gt)) * (prob[c] - (c == gt)));
       if (s >= 0) ++r.labelled;
+      ++r.confusion[gt][s >= 0 ? s : C];
       if (s == gt) {
         ++r.correct;
         ++tp[gt];
@@ -198,6 +201,7 @@ TEST_F(CliEndToEnd, MetricsEqualAnIndependentComputation) {
   EXPECT_NEAR(double(j["map"]["acc_all_queries"]), double(ind.correct) / ind.queries, 1e-12);
   EXPECT_NEAR(double(j["map"]["miou_all_queries"]), ind.miou_all, 1e-12);
   EXPECT_NEAR(double(j["map"]["brier"]), ind.brier, 1e-6);
+  EXPECT_EQ(j["confusion"]["map"].get<std::vector<std::vector<size_t>>>(), ind.confusion);
   // The read-out cap the metrics were computed with: the adaptive cap of the saved map's m.
   const double m = tree->meanPointLogEvidence();
   EXPECT_GT(m, 0.0);
