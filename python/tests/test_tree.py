@@ -245,11 +245,13 @@ def test_read_calibration_reads_the_cap_calibrate_writes(tmp_path):
     cap = eo.read_calibration(str(path))
     assert cap == 6.25
     assert eo.SemanticConfig(evidence_cap=cap).evidence_cap == 6.25
+    path.write_text("# the fit was not better: the adaptive cap\nevidence_cap: -1\n")
+    assert eo.read_calibration(str(path)) == -1.0
 
 
 def test_read_calibration_refuses_a_bad_file_with_its_line(tmp_path):
     path = tmp_path / "calibration.yaml"
-    path.write_text("evidence_cap: -1\n")
+    path.write_text("evidence_cap: -2\n")
     with pytest.raises(RuntimeError, match="calibration.yaml:1: evidence_cap must be"):
         eo.read_calibration(str(path))
     with pytest.raises(RuntimeError, match="cannot read"):

@@ -42,16 +42,24 @@ def validation_split(run):
     return "scans " + ", ".join(run["map_scans"]) + " (the mapped scans; queries: the others)"
 
 
+def written_cap(run):
+    """The cap of the calibration file: the fitted one, or "adaptive kept" (-1: the fit was not
+    better than the adaptive cap beyond its interval on the validation split)."""
+    if run["parameters"]["evidence_cap"] < 0:
+        return "adaptive kept"
+    return "%.2f" % run["tree"]["evidence_cap"]
+
+
 def row(key, adaptive, fitted, boot):
     a, f = adaptive["map"], fitted["map"]
     diff = "–"
     if boot is not None:
         x = boot["brier_difference"]
         diff = "%+.4f [%+.4f, %+.4f]" % (x["estimate"], x["lower"], x["upper"])
-    return "| %s | %s | %s | %s | %.2f (m %.2f) → %.2f | %.4f → %.4f | %s | %.3f → %.3f " \
+    return "| %s | %s | %s | %s | %.2f (m %.2f) → %s | %.4f → %.4f | %s | %.3f → %.3f " \
         "| %.3f → %.3f |" % (
             key[0], key[1], key[2], validation_split(adaptive), adaptive["tree"]["evidence_cap"],
-            adaptive["tree"]["mean_point_log_evidence"], fitted["tree"]["evidence_cap"],
+            adaptive["tree"]["mean_point_log_evidence"], written_cap(fitted),
             a["brier"], f["brier"], diff, a["ece"], f["ece"],
             a["error_detection"]["1-max_p"]["auroc"], f["error_detection"]["1-max_p"]["auroc"])
 
@@ -71,8 +79,10 @@ def main():
             "table ([calibration_tables.md](calibration_tables.md)), calibrated on a shorter "
             "sequence of the same kind with another seed. Bundled SemanticKITTI scans: "
             "calibrated on the held-out protocol's mapped scans, scored on its queries (the "
-            "other scans). Cap: the adaptive cap with the map's m → the fitted one. Δ Brier: the "
-            "fitted cap's minus the adaptive cap's, paired bootstrap, 95 %% interval over 10 m "
+            "other scans). Cap: the adaptive cap with the map's m → the cap of the file "
+            "`calibrate` wrote (it keeps the adaptive cap unless the fit has the lower Brier "
+            "score on the validation split beyond the 95 %% bootstrap interval). Δ Brier: the "
+            "file's cap's minus the adaptive cap's, paired bootstrap, 95 %% interval over 10 m "
             "blocks."
             % (command, commit, stamp), "",
             "| dataset | protocol | evidence | validation split | cap | Brier | Δ Brier | ECE | "

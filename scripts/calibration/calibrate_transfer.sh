@@ -2,9 +2,10 @@
 # Does a `calibrate` fit on a user's validation split carry over to their other data? For each
 # generated dataset of the cross-dataset table, a validation sequence of the same scene, sensor,
 # network and evidence scale but another seed (SCANS_VALIDATION scans) is calibrated, and the
-# fitted cap is scored on the table's sequence (both protocols) against the adaptive cap. The
-# bundled scans are calibrated on their first half, the held-out protocol's mapped scans, and
-# scored on the held-out queries (the second half). Writes docs/PAGE (default
+# cap of the file `calibrate` writes (the fit, or -1 when the fit is not better than the adaptive
+# cap beyond its interval) is scored on the table's sequence (both protocols) against the
+# adaptive cap. The bundled scans are calibrated on their first half, the held-out protocol's
+# mapped scans, and scored on the held-out queries (the second half). Writes docs/PAGE (default
 # results_calibrate.md).
 #   bash scripts/calibration/calibrate_transfer.sh [OUT_DIR] [PAGE]
 #   (SCANS=24, SCANS_VALIDATION=8)

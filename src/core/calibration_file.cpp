@@ -4,6 +4,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "evidential_octomap/semantic_config.h"
+
 namespace evidential_octomap {
 
 namespace {
@@ -35,9 +37,10 @@ double readCalibrationCap(const std::string& path) {
     } catch (const std::exception&) {
       used = 0;
     }
-    if (used == 0 || used != value.size() || !std::isfinite(cap) || cap < 0.0) {
-      throw std::runtime_error(where + "evidence_cap must be a finite number >= 0, not '" +
-                               value + "'");
+    const bool adaptive = cap == SemanticConfig::kAdaptiveCap;
+    if (used == 0 || used != value.size() || !std::isfinite(cap) || (cap < 0.0 && !adaptive)) {
+      throw std::runtime_error(where + "evidence_cap must be -1 (adaptive) or a finite number "
+                               ">= 0, not '" + value + "'");
     }
   }
   if (std::isnan(cap)) throw std::runtime_error(path + ": no evidence_cap in the calibration file");

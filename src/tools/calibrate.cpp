@@ -4,7 +4,10 @@
 // points (golden-section search over ln cap) is written as a parameter file that the node loads
 // (rosparam: `evidence_cap`), `map` and `eval` read (--calibration FILE) and Python reads
 // (evidential_octomap.read_calibration). Without it the cap follows the evidence
-// (SemanticConfig::kAdaptiveCap), with constants chosen across datasets.
+// (SemanticConfig::kAdaptiveCap), with constants chosen across datasets. A fit on a few scans
+// can be noise (docs/results_calibrate.md), so the file keeps the adaptive cap (-1) unless the
+// fitted one has the lower Brier score beyond the 95 % paired-bootstrap interval over 10 m
+// blocks of these scans (--keep-fit writes the fit regardless).
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -16,6 +19,7 @@
 #include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/io.h"
 #include "evidential_octomap/evaluation/metrics.h"
+#include "evidential_octomap/evaluation/paired_bootstrap.h"
 #include "pipeline.h"
 
 namespace evidential_octomap::tools {
@@ -29,6 +33,7 @@ struct CalibrateOptions {
   double resolution = 0.2;
   EvidenceOptions evidence;
   std::string evidence_name = "file";
+  bool keep_fit = false;
   bool quiet = false;
 };
 
@@ -39,6 +44,21 @@ double brierWithCap(EvidentialOcTree* tree, const std::vector<Query>& queries, i
   c.evidence_cap = cap;
   tree->setConfig(c);
   return evaluateMap(*tree, queries, ignore_class).quality.brier;
+}
+
+// The fitted cap's Brier score minus the adaptive cap's, paired over spatial blocks.
+BootstrapInterval brierDifference(EvidentialOcTree* tree, const std::vector<Query>& queries,
+                                  int ignore_class, double fitted, double adaptive) {
+  const BootstrapSettings settings;
+  size_t blocks = 0;
+  const std::vector<uint32_t> block_of = spatialBlocks(queries, settings.block_size, &blocks);
+  const auto scores = [&](double cap) {
+    brierWithCap(tree, queries, ignore_class, cap);  // sets the cap
+    std::vector<QueryOutcome> outcomes;
+    evaluateMap(*tree, queries, ignore_class, &outcomes);
+    return BlockScores(tree->numClasses(), block_of, blocks, outcomes);
+  };
+  return pairedBootstrap(scores(fitted), scores(adaptive), ignore_class, settings).brier;
 }
 
 void runCalibrate(const CalibrateOptions& o) {
@@ -55,7 +75,8 @@ void runCalibrate(const CalibrateOptions& o) {
                           !o.quiet, "mapping");
   const std::vector<Query> queries =
       buildQueries(scans, protocol.query_scans, classes.ignore_class, nullptr, nullptr);
-  const double adaptive = run.tree->effectiveEvidenceCap();
+  // The cap -1 stands for in the file, whatever cap the given settings read with.
+  const double adaptive = SemanticConfig::adaptiveEvidenceCap(run.tree->meanPointLogEvidence());
   const auto brier = [&](double log_cap) {
     return brierWithCap(run.tree.get(), queries, classes.ignore_class, std::exp(log_cap));
   };
@@ -72,20 +93,33 @@ void runCalibrate(const CalibrateOptions& o) {
   }
   const double cap = std::exp((a + b) / 2.0);
   const double best = brier(std::log(cap)), with_adaptive = brier(std::log(adaptive));
+  const BootstrapInterval d =
+      brierDifference(run.tree.get(), queries, classes.ignore_class, cap, adaptive);
+  const bool better = d.upper < 0.0;
+  const double written = better || o.keep_fit ? cap : SemanticConfig::kAdaptiveCap;
+  std::ostringstream difference;
+  difference << std::setprecision(3) << "Brier difference " << d.estimate << " [" << d.lower
+             << ", " << d.upper << "] (95 %, paired bootstrap over 10 m blocks)";
   std::ostringstream file;
   file << std::setprecision(4)
        << "# evidential_octomap read-out calibration, fitted by `evidential_octomap calibrate` on\n"
        << "# " << o.data << " (" << scans.size() << " scans, " << queries.size()
        << " GT points, evidence " << describeEvidence(ev) << ").\n"
-       << "# Brier score " << best << " (adaptive cap " << adaptive << ": " << with_adaptive
-       << "). Load it as node parameters (rosparam load, or the launch files' config:=),\n"
-       << "# pass it to `evidential_octomap map --calibration FILE`, or read it in Python with\n"
+       << "# Fitted cap " << cap << ": Brier score " << best << "; adaptive cap " << adaptive
+       << ": " << with_adaptive << "; " << difference.str() << ".\n"
+       << (better || o.keep_fit ? ""
+                                : "# The fit is not better beyond that interval on these scans, "
+                                  "so the adaptive cap (-1) is kept; --keep-fit writes the fit.\n")
+       << "# Load it as node parameters (rosparam load, or the launch files' config:=), pass it\n"
+       << "# to `evidential_octomap map --calibration FILE`, or read it in Python with\n"
        << "# evidential_octomap.read_calibration(FILE).\n"
-       << "evidence_cap: " << cap << "\n";
+       << "evidence_cap: " << written << "\n";
   writeFileAtomically(o.out, file.str());
   std::cout << std::setprecision(4) << "evidence cap " << cap << ": Brier " << best
-            << " (the adaptive cap " << adaptive << " gives " << with_adaptive << ")\nwrote "
-            << o.out << "\n";
+            << " (the adaptive cap " << adaptive << " gives " << with_adaptive << ")\n"
+            << difference.str() << "\nwrote evidence_cap: " << written
+            << (written == cap ? "" : " (adaptive: the fit is not better beyond the interval)")
+            << " to " << o.out << "\n";
 }
 
 }  // namespace
@@ -102,6 +136,9 @@ void addCalibrateCommand(CLI::App& app) {
       ->capture_default_str();
   addConfigOptions(cmd, &o->config, &o->resolution);
   addEvidenceOptions(cmd, &o->evidence, &o->evidence_name);
+  cmd->add_flag("--keep-fit", o->keep_fit,
+                "Write the fitted cap even when its Brier score is not lower than the adaptive "
+                "cap's beyond the 95 % bootstrap interval (by default the file then keeps -1)");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bars");
   cmd->callback([o]() { runCalibrate(*o); });
 }
