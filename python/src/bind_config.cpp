@@ -48,9 +48,9 @@ void bindConfig(nb::module_& m) {
   }
   m.attr("EVIDENCE_MAGNITUDE") = kEvidenceMagnitude;
   m.def("read_calibration", &evidential_octomap::readCalibrationCap, nb::arg("path"),
-        "The dempster read-out cap of a file written by `evidential_octomap calibrate`: "
-        "SemanticConfig(evidence_cap=read_calibration(path)). Raises RuntimeError (naming the "
-        "file and line) for an unreadable or invalid file.");
+        "The dempster read-out cap of a file written by `evidential_octomap calibrate` (-1: "
+        "the adaptive cap): SemanticConfig(evidence_cap=read_calibration(path)). Raises "
+        "RuntimeError (naming the file and line) for an unreadable or invalid file.");
 }
 
 }  // namespace evidential_octomap::python
