@@ -3,10 +3,10 @@
 
     calibrate_transfer.py DIR PAGE COMMAND
 
-Reads DIR/compare_*/compare.json (each: `dempster` with the adaptive cap, and `dempster` with the
-cap that `calibrate` fitted on the validation split) and writes PAGE: per dataset, protocol and
-evidence, both caps, and the Brier score, ECE and AUROC of 1 - max p under each, with the
-paired-bootstrap difference of the fitted cap's Brier score.
+Reads DIR/compare_*/compare.json (each: `dempster` with the adaptive cap, with the cap of the
+file `calibrate` wrote on the validation split and, when that file kept the adaptive cap (-1),
+with the fit it did not keep) and writes PAGE: per dataset, protocol and evidence, the caps, the
+Brier score and ECE under each and the paired-bootstrap difference of the Brier scores.
 """
 import glob
 import json
@@ -19,7 +19,9 @@ DEFAULT = "dempster"
 
 
 def runs_by_section(directory):
-    """(dataset, protocol, evidence) -> (adaptive run, calibrated run, bootstrap row)."""
+    """(dataset, protocol, evidence) -> (adaptive run, file's run, fit's run, bootstrap rows).
+    The file's run reads with the cap `calibrate` wrote; the fit's is the fitted cap, the same
+    run unless the file kept the adaptive cap (-1)."""
     sections = {}
     for path in sorted(glob.glob(os.path.join(directory, "compare_*", "compare.json"))):
         d = json.load(open(path))
@@ -30,9 +32,15 @@ def runs_by_section(directory):
             by_key.setdefault((r["dataset_label"], r["protocol"], r["evidence_source"]), {})[
                 r["variant_id"]] = r
         for key, runs in by_key.items():
-            fitted = [v for v in runs if v != DEFAULT]
-            if DEFAULT in runs and len(fitted) == 1:
-                sections[key] = (runs[DEFAULT], runs[fitted[0]], boot.get(key + (fitted[0],)))
+            others = [r for v, r in runs.items() if v != DEFAULT]
+            kept = [r for r in others if r["parameters"]["evidence_cap"] < 0]
+            fitted = [r for r in others if r["parameters"]["evidence_cap"] >= 0]
+            if DEFAULT not in runs or len(fitted) != 1:
+                continue
+            written = (kept or fitted)[0]
+            sections[key] = (runs[DEFAULT], written, fitted[0],
+                             {r["variant_id"]: boot.get(key + (r["variant_id"],))
+                              for r in others})
     return sections
 
 
@@ -43,25 +51,29 @@ def validation_split(run):
 
 
 def written_cap(run):
-    """The cap of the calibration file: the fitted one, or "adaptive kept" (-1: the fit was not
+    """The cap of the calibration file: the fitted one, or "adaptive" (-1: the fit was not
     better than the adaptive cap beyond its interval on the validation split)."""
     if run["parameters"]["evidence_cap"] < 0:
-        return "adaptive kept"
+        return "adaptive"
     return "%.2f" % run["tree"]["evidence_cap"]
 
 
-def row(key, adaptive, fitted, boot):
-    a, f = adaptive["map"], fitted["map"]
-    diff = "–"
-    if boot is not None:
-        x = boot["brier_difference"]
-        diff = "%+.4f [%+.4f, %+.4f]" % (x["estimate"], x["lower"], x["upper"])
-    return "| %s | %s | %s | %s | %.2f (m %.2f) → %s | %.4f → %.4f | %s | %.3f → %.3f " \
-        "| %.3f → %.3f |" % (
-            key[0], key[1], key[2], validation_split(adaptive), adaptive["tree"]["evidence_cap"],
-            adaptive["tree"]["mean_point_log_evidence"], written_cap(fitted),
-            a["brier"], f["brier"], diff, a["ece"], f["ece"],
-            a["error_detection"]["1-max_p"]["auroc"], f["error_detection"]["1-max_p"]["auroc"])
+def brier_difference(boot):
+    if boot is None:
+        return "±0"  # the file's cap is the adaptive one: the same map
+    x = boot["brier_difference"]
+    return "%+.4f [%+.4f, %+.4f]" % (x["estimate"], x["lower"], x["upper"])
+
+
+def row(key, adaptive, written, fit, boot):
+    a, w, f = adaptive["map"], written["map"], fit["map"]
+    unkept = "–" if fit is written else "%.2f: %.4f (%s), ECE %.3f" % (
+        fit["tree"]["evidence_cap"], f["brier"], brier_difference(boot[fit["variant_id"]]),
+        f["ece"])
+    return "| %s | %s | %s | %s | %.2f (m %.2f) → %s | %.4f → %.4f | %s | %.3f → %.3f | %s |" % (
+        key[0], key[1], key[2], validation_split(adaptive), adaptive["tree"]["evidence_cap"],
+        adaptive["tree"]["mean_point_log_evidence"], written_cap(written), a["brier"], w["brier"],
+        brier_difference(boot.get(written["variant_id"])), a["ece"], w["ece"], unkept)
 
 
 def main():
@@ -80,13 +92,14 @@ def main():
             "sequence of the same kind with another seed. Bundled SemanticKITTI scans: "
             "calibrated on the held-out protocol's mapped scans, scored on its queries (the "
             "other scans). Cap: the adaptive cap with the map's m → the cap of the file "
-            "`calibrate` wrote (it keeps the adaptive cap unless the fit has the lower Brier "
-            "score on the validation split beyond the 95 %% bootstrap interval). Δ Brier: the "
-            "file's cap's minus the adaptive cap's, paired bootstrap, 95 %% interval over 10 m "
-            "blocks."
+            "`calibrate` wrote: the fit when its Brier score on the validation split is lower "
+            "beyond the 95 %% bootstrap interval, else the adaptive cap. Δ Brier: the file's "
+            "cap's minus the adaptive cap's, paired bootstrap, 95 %% interval over 10 m blocks. "
+            "Fit not kept: the fitted cap that the file did not keep (what `--keep-fit` "
+            "writes), its Brier score (Δ against the adaptive cap) and ECE."
             % (command, commit, stamp), "",
             "| dataset | protocol | evidence | validation split | cap | Brier | Δ Brier | ECE | "
-            "AUROC 1 − max p |", "|" + "---|" * 9]
+            "fit not kept |", "|" + "---|" * 9]
     for key in sorted(sections):
         text.append(row(key, *sections[key]))
     with open(page, "w") as f:

@@ -20,8 +20,15 @@ mkdir -p "${out}/calibrate"
 source "${root}/scripts/calibration/datasets.sh"
 generated_datasets "${cli}" "${out}" "${scans}"
 
-# The cap written by `calibrate` into FILE.
-cap_of() { sed -n 's/^evidence_cap: //p' "$1"; }
+# The variants scored: the adaptive cap, the cap `calibrate` wrote into FILE and, when that is
+# the adaptive one, the fit it did not keep (what --keep-fit writes).
+variants_of() {
+  local written fit
+  written="$(sed -n 's/^evidence_cap: //p' "$1")"
+  fit="$(sed -n 's/^# Fitted cap \([^:]*\):.*/\1/p' "$1")"
+  echo "dempster,dempster:evidence_cap=${written}$([ "${written}" = -1 ] &&
+    echo ",dempster:evidence_cap=${fit}")"
+}
 
 for spec in "${GENERATED_SPECS[@]}"; do
   read -r name args <<<"${spec}"
@@ -31,9 +38,9 @@ for spec in "${GENERATED_SPECS[@]}"; do
     --out "${validation}" -q ${args/--seed ${seed}/--seed $((seed + 100))}
   "${cli}" calibrate --data "${validation}" --classes "${validation}/classes.yaml" \
     --evidence file --out "${out}/calibrate/${name}.yaml" -q > /dev/null
-  fitted="dempster:evidence_cap=$(cap_of "${out}/calibrate/${name}.yaml")"
   "${cli}" compare --data "${out}/${name}" --classes "${out}/${name}/classes.yaml" --no-rellis \
-    --sources file --variants "dempster,${fitted}" --protocols reconstruction,held-out \
+    --sources file --variants "$(variants_of "${out}/calibrate/${name}.yaml")" \
+    --protocols reconstruction,held-out \
     --out "${out}/calibrate/compare_${name}" --quiet > /dev/null
 done
 
@@ -42,9 +49,8 @@ kitti=(--data "${root}/data/semantickitti_08_first10"
 for evidence in learned onehot; do
   "${cli}" calibrate "${kitti[@]}" --scans 5 --evidence "${evidence}" \
     --out "${out}/calibrate/bundled_${evidence}.yaml" -q > /dev/null
-  fitted="dempster:evidence_cap=$(cap_of "${out}/calibrate/bundled_${evidence}.yaml")"
   "${cli}" compare "${kitti[@]}" --no-rellis --sources "${evidence}" --protocols held-out \
-    --variants "dempster,${fitted}" \
+    --variants "$(variants_of "${out}/calibrate/bundled_${evidence}.yaml")" \
     --out "${out}/calibrate/compare_bundled_${evidence}" --quiet > /dev/null
 done
 
