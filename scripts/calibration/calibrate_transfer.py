@@ -70,7 +70,8 @@ def row(key, adaptive, written, fit, boot):
     unkept = "–" if fit is written else "%.2f: %.4f (%s), ECE %.3f" % (
         fit["tree"]["evidence_cap"], f["brier"], brier_difference(boot[fit["variant_id"]]),
         f["ece"])
-    return "| %s | %s | %s | %s | %.2f (m %.2f) → %s | %.4f → %.4f | %s | %.3f → %.3f | %s |" % (
+    return ("| %s | %s | %s | %s | %.2f (m %.2f) → %s | %.4f → %.4f | %s | %.3f → %.3f "
+            "| %s |") % (
         key[0], key[1], key[2], validation_split(adaptive), adaptive["tree"]["evidence_cap"],
         adaptive["tree"]["mean_point_log_evidence"], written_cap(written), a["brier"], w["brier"],
         brier_difference(boot.get(written["variant_id"])), a["ece"], w["ece"], unkept)
