@@ -17,9 +17,9 @@
 
 #include "commands.h"
 #include "evidential_octomap/evaluation/dataset.h"
-#include "evidential_octomap/io.h"
 #include "evidential_octomap/evaluation/metrics.h"
 #include "evidential_octomap/evaluation/paired_bootstrap.h"
+#include "evidential_octomap/io.h"
 #include "pipeline.h"
 
 namespace evidential_octomap::tools {
@@ -61,6 +61,70 @@ BootstrapInterval brierDifference(EvidentialOcTree* tree, const std::vector<Quer
   return pairedBootstrap(scores(fitted), scores(adaptive), ignore_class, settings).brier;
 }
 
+// The cap of lowest Brier score, the adaptive cap against it and what the file keeps.
+struct CapFit {
+  double cap = 0.0, brier = 0.0;
+  double adaptive = 0.0, adaptive_brier = 0.0;
+  BootstrapInterval difference;  // fit minus adaptive
+  double written = 0.0;          // the fit, or SemanticConfig::kAdaptiveCap
+};
+
+CapFit fitCap(EvidentialOcTree* tree, const std::vector<Query>& queries, int ignore_class,
+              bool keep_fit) {
+  const auto brier = [&](double log_cap) {
+    return brierWithCap(tree, queries, ignore_class, std::exp(log_cap));
+  };
+  // Golden-section search on ln cap in [ln 0.5, ln 100] (the Brier score is unimodal in it).
+  const double r = (std::sqrt(5.0) - 1.0) / 2.0;
+  double a = std::log(0.5), b = std::log(100.0), x1 = b - r * (b - a), x2 = a + r * (b - a);
+  double f1 = brier(x1), f2 = brier(x2);
+  for (int i = 0; i < 14; ++i) {
+    if (f1 < f2) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - r * (b - a), f1 = brier(x1);
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + r * (b - a), f2 = brier(x2);
+    }
+  }
+  CapFit fit;
+  fit.cap = std::exp((a + b) / 2.0);
+  fit.brier = brier(std::log(fit.cap));
+  // The cap -1 stands for in the file, whatever cap the given settings read with.
+  fit.adaptive = SemanticConfig::adaptiveEvidenceCap(tree->meanPointLogEvidence());
+  fit.adaptive_brier = brier(std::log(fit.adaptive));
+  fit.difference = brierDifference(tree, queries, ignore_class, fit.cap, fit.adaptive);
+  const bool better = fit.difference.upper < 0.0;
+  fit.written = better || keep_fit ? fit.cap : SemanticConfig::kAdaptiveCap;
+  return fit;
+}
+
+std::string differenceText(const BootstrapInterval& d) {
+  std::ostringstream text;
+  text << std::setprecision(3) << "Brier difference " << d.estimate << " [" << d.lower << ", "
+       << d.upper << "] (95 %, paired bootstrap over 10 m blocks)";
+  return text.str();
+}
+
+std::string calibrationFile(const std::string& data, size_t scans, size_t queries,
+                            const EvidenceOptions& ev, const CapFit& fit) {
+  std::ostringstream file;
+  file << std::setprecision(4)
+       << "# evidential_octomap read-out calibration, fitted by `evidential_octomap calibrate` on\n"
+       << "# " << data << " (" << scans << " scans, " << queries << " GT points, evidence "
+       << describeEvidence(ev) << ").\n"
+       << "# Fitted cap " << fit.cap << ": Brier score " << fit.brier << "; adaptive cap "
+       << fit.adaptive << ": " << fit.adaptive_brier << "; " << differenceText(fit.difference)
+       << ".\n"
+       << (fit.written == fit.cap ? ""
+                                  : "# The fit is not better beyond that interval on these "
+                                    "scans, so the adaptive cap (-1) is kept; --keep-fit writes "
+                                    "the fit.\n")
+       << "# Load it as node parameters (rosparam load, or the launch files' config:=), pass it\n"
+       << "# to `evidential_octomap map --calibration FILE`, or read it in Python with\n"
+       << "# evidential_octomap.read_calibration(FILE).\n"
+       << "evidence_cap: " << fit.written << "\n";
+  return file.str();
+}
+
 void runCalibrate(const CalibrateOptions& o) {
   const ClassTable classes = ClassTable::load(o.classes);
   EvidenceOptions ev = o.evidence;
@@ -75,50 +139,13 @@ void runCalibrate(const CalibrateOptions& o) {
                           !o.quiet, "mapping");
   const std::vector<Query> queries =
       buildQueries(scans, protocol.query_scans, classes.ignore_class, nullptr, nullptr);
-  // The cap -1 stands for in the file, whatever cap the given settings read with.
-  const double adaptive = SemanticConfig::adaptiveEvidenceCap(run.tree->meanPointLogEvidence());
-  const auto brier = [&](double log_cap) {
-    return brierWithCap(run.tree.get(), queries, classes.ignore_class, std::exp(log_cap));
-  };
-  // Golden-section search on ln cap in [ln 0.5, ln 100] (the Brier score is unimodal in it).
-  const double r = (std::sqrt(5.0) - 1.0) / 2.0;
-  double a = std::log(0.5), b = std::log(100.0), x1 = b - r * (b - a), x2 = a + r * (b - a);
-  double f1 = brier(x1), f2 = brier(x2);
-  for (int i = 0; i < 14; ++i) {
-    if (f1 < f2) {
-      b = x2, x2 = x1, f2 = f1, x1 = b - r * (b - a), f1 = brier(x1);
-    } else {
-      a = x1, x1 = x2, f1 = f2, x2 = a + r * (b - a), f2 = brier(x2);
-    }
-  }
-  const double cap = std::exp((a + b) / 2.0);
-  const double best = brier(std::log(cap)), with_adaptive = brier(std::log(adaptive));
-  const BootstrapInterval d =
-      brierDifference(run.tree.get(), queries, classes.ignore_class, cap, adaptive);
-  const bool better = d.upper < 0.0;
-  const double written = better || o.keep_fit ? cap : SemanticConfig::kAdaptiveCap;
-  std::ostringstream difference;
-  difference << std::setprecision(3) << "Brier difference " << d.estimate << " [" << d.lower
-             << ", " << d.upper << "] (95 %, paired bootstrap over 10 m blocks)";
-  std::ostringstream file;
-  file << std::setprecision(4)
-       << "# evidential_octomap read-out calibration, fitted by `evidential_octomap calibrate` on\n"
-       << "# " << o.data << " (" << scans.size() << " scans, " << queries.size()
-       << " GT points, evidence " << describeEvidence(ev) << ").\n"
-       << "# Fitted cap " << cap << ": Brier score " << best << "; adaptive cap " << adaptive
-       << ": " << with_adaptive << "; " << difference.str() << ".\n"
-       << (better || o.keep_fit ? ""
-                                : "# The fit is not better beyond that interval on these scans, "
-                                  "so the adaptive cap (-1) is kept; --keep-fit writes the fit.\n")
-       << "# Load it as node parameters (rosparam load, or the launch files' config:=), pass it\n"
-       << "# to `evidential_octomap map --calibration FILE`, or read it in Python with\n"
-       << "# evidential_octomap.read_calibration(FILE).\n"
-       << "evidence_cap: " << written << "\n";
-  writeFileAtomically(o.out, file.str());
-  std::cout << std::setprecision(4) << "evidence cap " << cap << ": Brier " << best
-            << " (the adaptive cap " << adaptive << " gives " << with_adaptive << ")\n"
-            << difference.str() << "\nwrote evidence_cap: " << written
-            << (written == cap ? "" : " (adaptive: the fit is not better beyond the interval)")
+  const CapFit fit = fitCap(run.tree.get(), queries, classes.ignore_class, o.keep_fit);
+  writeFileAtomically(o.out, calibrationFile(o.data, scans.size(), queries.size(), ev, fit));
+  std::cout << std::setprecision(4) << "evidence cap " << fit.cap << ": Brier " << fit.brier
+            << " (the adaptive cap " << fit.adaptive << " gives " << fit.adaptive_brier << ")\n"
+            << differenceText(fit.difference) << "\nwrote evidence_cap: " << fit.written
+            << (fit.written == fit.cap ? ""
+                                       : " (adaptive: the fit is not better beyond the interval)")
             << " to " << o.out << "\n";
 }
 
