@@ -15,6 +15,7 @@
 #include <memory>
 #include <sstream>
 
+#include "bootstrap_report.h"
 #include "commands.h"
 #include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/evaluation/metrics.h"
@@ -37,26 +38,30 @@ struct CalibrateOptions {
   bool quiet = false;
 };
 
-// Brier score of the map read with a fixed cap (only the read-out changes).
-double brierWithCap(EvidentialOcTree* tree, const std::vector<Query>& queries, int ignore_class,
-                    double cap) {
+// Reads the map with a fixed cap (only the read-out changes).
+void setCap(EvidentialOcTree* tree, double cap) {
   SemanticConfig c = tree->config();
   c.evidence_cap = cap;
   tree->setConfig(c);
+}
+
+double brierWithCap(EvidentialOcTree* tree, const std::vector<Query>& queries, int ignore_class,
+                    double cap) {
+  setCap(tree, cap);
   return evaluateMap(*tree, queries, ignore_class).quality.brier;
 }
 
-// The fitted cap's Brier score minus the adaptive cap's, paired over spatial blocks.
+// The fitted cap's Brier score minus the adaptive cap's, paired over spatial blocks (compare's
+// bootstrap).
 BootstrapInterval brierDifference(EvidentialOcTree* tree, const std::vector<Query>& queries,
                                   int ignore_class, double fitted, double adaptive) {
   const BootstrapSettings settings;
-  size_t blocks = 0;
-  const std::vector<uint32_t> block_of = spatialBlocks(queries, settings.block_size, &blocks);
+  const BootstrapReport report(queries, tree->numClasses(), ignore_class, settings);
   const auto scores = [&](double cap) {
-    brierWithCap(tree, queries, ignore_class, cap);  // sets the cap
+    setCap(tree, cap);
     std::vector<QueryOutcome> outcomes;
     evaluateMap(*tree, queries, ignore_class, &outcomes);
-    return BlockScores(tree->numClasses(), block_of, blocks, outcomes);
+    return report.scores(outcomes);
   };
   return pairedBootstrap(scores(fitted), scores(adaptive), ignore_class, settings).brier;
 }

@@ -119,8 +119,8 @@ nlohmann::json confusionJson(const ConfusionMatrix& m) {
   nlohmann::json rows = nlohmann::json::array();
   for (int gt = 0; gt < m.numClasses(); ++gt) {
     std::vector<uint64_t> row;
-    for (int p = -1; p < m.numClasses(); ++p) row.push_back(m.at(gt, p));
-    std::rotate(row.begin(), row.begin() + 1, row.end());  // the no-label column last
+    for (int p = 0; p < m.numClasses(); ++p) row.push_back(m.at(gt, p));
+    row.push_back(m.at(gt, -1));
     rows.push_back(row);
   }
   return rows;
