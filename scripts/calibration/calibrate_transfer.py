@@ -15,6 +15,8 @@ import subprocess
 import sys
 from datetime import datetime, timezone
 
+from summarize import interval
+
 DEFAULT = "dempster"
 
 
@@ -61,8 +63,7 @@ def written_cap(run):
 def brier_difference(boot):
     if boot is None:
         return "±0"  # the file's cap is the adaptive one: the same map
-    x = boot["brier_difference"]
-    return "%+.4f [%+.4f, %+.4f]" % (x["estimate"], x["lower"], x["upper"])
+    return interval(boot["brier_difference"])
 
 
 def row(key, adaptive, written, fit, boot):
