@@ -127,6 +127,11 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // re-interprets stored payloads, so it is refused (std::logic_error) while the map holds any.
   void setConfig(const SemanticConfig& config);
   const FusionRule& rule() const { return *rule_; }
+  // The error model of a calibration file (calibration_file.h) that the read-out applies, kept
+  // across setConfig; null removes it. A map's file does not store it: it belongs to the
+  // network, not to the map. Throws std::invalid_argument unless the rule is dempster.
+  void setErrorModel(std::shared_ptr<const ErrorModel> model);
+  const std::shared_ptr<const ErrorModel>& errorModel() const { return error_model_; }
   // The dempster read-out cap in use: config().evidence_cap, or the adaptive cap of the
   // evidence inserted so far (SemanticConfig::kAdaptiveCap).
   double effectiveEvidenceCap() const;
@@ -331,6 +336,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   std::vector<std::string> class_names_;
   std::vector<bool> ground_classes_;  // empty: no ground class
   SemanticConfig config_;
+  std::shared_ptr<const ErrorModel> error_model_;
   std::unique_ptr<FusionRule> rule_;
   std::unique_ptr<PayloadStore> pool_;  // one sparse payload per semantic leaf
   std::string read_error_;

@@ -38,7 +38,12 @@ struct VoxelOpinion {
   //             -sum ln(1 - delta) over all fusions, divided by the log-evidence brought in);
   //   sbki/ebs: the share of the added counts sum(alpha - prior) not on the label.
   float conflict = 0.0f;
+  // P(label wrong) of the calibration's error model (error_model.h) when the rule has one, else
+  // -1; FusionRule::errorProbability answers either way.
+  float error_probability = -1.0f;
 };
+
+class ErrorModel;
 
 class FusionRule {
  public:
@@ -65,11 +70,18 @@ class FusionRule {
   // Interprets a payload of C floats.
   virtual VoxelOpinion readout(const float* payload, int num_classes) const = 0;
   // The class probabilities an opinion projects to (C = its belief's size): dempster b^c + u/C,
-  // sbki/ebs the expected probabilities it holds. The Brier score and ECE are of these.
+  // sbki/ebs the expected probabilities it holds; with an error model the label's is 1 - its
+  // error probability and the others share the rest in proportion. The Brier score and ECE are
+  // of these.
   std::vector<float> probabilities(const VoxelOpinion& opinion) const;
-  // 1 - max_c p_c: the map's own probability that the voxel's label is wrong, the uncertainty
-  // that detects wrong labels best across datasets (docs/results.md); 1 without a label.
+  // The map's probability that the voxel's label is wrong: the error model's when the rule has
+  // one (fitted by `calibrate`), else 1 - max_c p_c, the read-out that detects wrong labels best
+  // across datasets without labels (docs/results.md); 1 without a label.
   float errorProbability(const VoxelOpinion& opinion) const;
+  // The error model the read-out applies (dempster only: ErrorModel's features are of L);
+  // null removes it. Throws std::invalid_argument for another rule.
+  void setErrorModel(std::shared_ptr<const ErrorModel> model);
+  const std::shared_ptr<const ErrorModel>& errorModel() const { return error_model_; }
 
   // The rule of a map's settings (rule, sbki_prior, evidence_cap).
   static std::unique_ptr<FusionRule> create(const SemanticConfig& config);
@@ -77,6 +89,9 @@ class FusionRule {
                                             double evidence_cap = 0.0);
   // Throws std::invalid_argument naming the valid rules when `name` is unknown.
   static std::unique_ptr<FusionRule> create(const std::string& name, float sbki_prior = 0.001f);
+
+ protected:
+  std::shared_ptr<const ErrorModel> error_model_;
 };
 
 FusionRuleType fusionRuleFromName(const std::string& name);

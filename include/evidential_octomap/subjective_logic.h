@@ -28,6 +28,10 @@ Opinion opinionFromEvidence(const float* evidence, int num_classes);
 // result is the vacuous opinion rather than NaN.
 Opinion dempsterCombine(const Opinion& m1, const Opinion& m2);
 
+// Dissonance of belief masses (Josang 2018, 4.4.3): sum_k b_k [sum_{j!=k} b_j Bal(b_j, b_k)] /
+// [sum_{j!=k} b_j], Bal(a, b) = 1 - |a - b| / (a + b); 0 when one class holds all belief.
+double dissonance(const std::vector<float>& belief);
+
 // Checks one evidence vector: every value finite and >= 0. Returns an empty string when valid,
 // otherwise a message naming the offending class and value.
 std::string checkEvidence(const float* evidence, int num_classes);

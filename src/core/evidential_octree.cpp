@@ -78,6 +78,7 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
       class_names_(rhs.class_names_),
       ground_classes_(rhs.ground_classes_),
       config_(rhs.config_),
+      error_model_(rhs.error_model_),
       rule_(rhs.makeRule(rhs.config_)),
       pool_(std::make_unique<PayloadStore>(rhs.num_classes_, rhs.rule_->prior())),
       evidence_log_sum_(rhs.evidence_log_sum_),
@@ -219,7 +220,14 @@ double EvidentialOcTree::effectiveEvidenceCap() const {
 std::unique_ptr<FusionRule> EvidentialOcTree::makeRule(const SemanticConfig& config) const {
   SemanticConfig resolved = config;
   resolved.evidence_cap = capOf(config);
-  return FusionRule::create(resolved);
+  auto rule = FusionRule::create(resolved);
+  if (rule->type() == FusionRuleType::kDempster) rule->setErrorModel(error_model_);
+  return rule;
+}
+
+void EvidentialOcTree::setErrorModel(std::shared_ptr<const ErrorModel> model) {
+  rule_->setErrorModel(model);
+  error_model_ = std::move(model);
 }
 
 double EvidentialOcTree::capOf(const SemanticConfig& config) const {

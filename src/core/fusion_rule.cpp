@@ -6,6 +6,8 @@
 #include <stdexcept>
 
 #include "evidential_octomap/fusion_rule.h"
+
+#include "evidential_octomap/error_model.h"
 #include "fusion_contributions.h"
 
 namespace evidential_octomap {
@@ -62,6 +64,9 @@ class DempsterRule : public FusionRule {
     const double kept = read(payload, num_classes, scale, m * scale, &out);
     const double kept_uncapped = scale == 1.0 ? kept : read(payload, num_classes, 1.0, m, nullptr);
     out.conflict = static_cast<float>(std::clamp(1.0 - kept_uncapped / total, 0.0, 1.0));
+    if (error_model_) {
+      out.error_probability = float(error_model_->probability(payload, out, num_classes));
+    }
     return out;
   }
 
@@ -159,15 +164,31 @@ std::vector<float> FusionRule::probabilities(const VoxelOpinion& opinion) const 
   const float share = opinion.uncertainty / float(opinion.belief.size());
   std::vector<float> p(opinion.belief);
   for (float& value : p) value += share;
+  if (opinion.error_probability >= 0.0f && opinion.label >= 0) {
+    const double rest = 1.0 - p[opinion.label], error = opinion.error_probability;
+    for (size_t c = 0; c < p.size(); ++c) {
+      p[c] = int(c) == opinion.label ? float(1.0 - error)
+             : rest > 0.0            ? float(p[c] * error / rest)
+                                     : float(error / double(p.size() - 1));
+    }
+  }
   return p;
 }
 
 float FusionRule::errorProbability(const VoxelOpinion& opinion) const {
   if (opinion.label < 0 || opinion.belief.empty()) return 1.0f;  // no label: none is right
+  if (opinion.error_probability >= 0.0f) return opinion.error_probability;
   // max_c p_c without building p: dempster adds the same share u / C to every class.
   const float best = *std::max_element(opinion.belief.begin(), opinion.belief.end());
   const float share = uncertaintyIsMass() ? opinion.uncertainty / float(opinion.belief.size()) : 0;
   return 1.0f - (best + share);
+}
+
+void FusionRule::setErrorModel(std::shared_ptr<const ErrorModel> model) {
+  if (model && type() != FusionRuleType::kDempster) {
+    throw std::invalid_argument("an error model reads dempster maps, not '" + name() + "'");
+  }
+  error_model_ = std::move(model);
 }
 
 void FusionRule::add(float* payload, const double* increments, int num_classes) const {

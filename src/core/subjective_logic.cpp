@@ -142,4 +142,21 @@ std::string evidenceFromLogits(const float* z, int num_classes, LogitTransform t
   return {};
 }
 
+double dissonance(const std::vector<float>& belief) {
+  double total = 0.0;
+  const size_t n = belief.size();
+  for (size_t k = 0; k < n; ++k) {
+    if (!(belief[k] > 0.0f)) continue;
+    double others = 0.0, balanced = 0.0;
+    for (size_t j = 0; j < n; ++j) {
+      if (j == k || !(belief[j] > 0.0f)) continue;
+      others += belief[j];
+      balanced += belief[j] * (1.0 - std::fabs(double(belief[j]) - belief[k]) /
+                                         (double(belief[j]) + belief[k]));
+    }
+    if (others > 0.0) total += belief[k] * balanced / others;
+  }
+  return total;
+}
+
 }  // namespace evidential_octomap

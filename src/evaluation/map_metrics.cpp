@@ -10,23 +10,6 @@
 
 namespace evidential_octomap {
 
-double dissonance(const std::vector<float>& belief) {
-  double total = 0.0;
-  const size_t n = belief.size();
-  for (size_t k = 0; k < n; ++k) {
-    if (!(belief[k] > 0.0f)) continue;
-    double others = 0.0, balanced = 0.0;
-    for (size_t j = 0; j < n; ++j) {
-      if (j == k || !(belief[j] > 0.0f)) continue;
-      others += belief[j];
-      balanced += belief[j] * (1.0 - std::fabs(double(belief[j]) - belief[k]) /
-                                         (double(belief[j]) + belief[k]));
-    }
-    if (others > 0.0) total += belief[k] * balanced / others;
-  }
-  return total;
-}
-
 Answer answerOf(const VoxelOpinion& o, const FusionRule& rule) {
   Answer a;
   a.label = o.label;
@@ -34,7 +17,10 @@ Answer answerOf(const VoxelOpinion& o, const FusionRule& rule) {
   a.probability = rule.probabilities(o);
   // Dissonance of the subjective-logic belief masses; the Dirichlet rules have none apart from
   // their expected probabilities, read as a dogmatic opinion.
-  a.uncertainty = {o.uncertainty, o.conflict, rule.errorProbability(o), float(dissonance(o.belief))};
+  VoxelOpinion readout = o;
+  readout.error_probability = -1.0f;  // 1 - max p of the read-out itself
+  a.uncertainty = {o.uncertainty, o.conflict, rule.errorProbability(readout),
+                   float(dissonance(o.belief)), rule.errorProbability(o)};
   return a;
 }
 

@@ -145,8 +145,9 @@ cv::Scalar outputColour(size_t output) {
   static const cv::Scalar kColours[] = {{200, 90, 30},
                                         {40, 40, 220},
                                         {40, 160, 40},
-                                        {180, 60, 170}};  // BGR: blue, red, green, purple
-  return kColours[output % 4];
+                                        {180, 60, 170},
+                                        {0, 140, 255}};  // BGR: blue, red, green, purple, orange
+  return kColours[output % 5];
 }
 
 double errorAxisTop(const QualityMetrics& map, const QualityMetrics& input) {

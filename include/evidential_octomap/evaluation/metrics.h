@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/subjective_logic.h"  // dissonance
 
 namespace evidential_octomap {
 
@@ -72,7 +73,10 @@ class ConfusionMatrix {
 //   conflict    VoxelOpinion::conflict
 //   1-max_p     one minus the largest projected probability
 //   dissonance  subjective logic's dissonance of the belief masses (Josang 2018, 4.4.3)
-inline const std::vector<std::string> kUncertaintyOutputs{"u", "conflict", "1-max_p", "dissonance"};
+//   error_probability  FusionRule::errorProbability: the calibration's error model where the map
+//               has one, else 1-max_p
+inline const std::vector<std::string> kUncertaintyOutputs{"u", "conflict", "1-max_p", "dissonance",
+                                                          "error_probability"};
 
 // What a row says at one query.
 struct Answer {
@@ -96,9 +100,6 @@ Answer answerOf(const VoxelOpinion& opinion, const FusionRule& rule);
 // The answer of one point's evidence: its own subjective opinion (b = e/S, u = C/S, p = alpha/S),
 // read exactly as a dempster voxel that fused only this point at k = 1.
 Answer answerOfEvidence(const float* evidence, int num_classes);
-// Dissonance of belief masses: sum_k b_k [sum_{j!=k} b_j Bal(b_j, b_k)] / [sum_{j!=k} b_j],
-// Bal(a, b) = 1 - |a - b| / (a + b) (0 when both are 0).
-double dissonance(const std::vector<float>& belief);
 
 // AUROC of `score` for `positive` (ties count 1/2); NaN without both kinds.
 double auroc(const std::vector<float>& score, const std::vector<uint8_t>& positive);
