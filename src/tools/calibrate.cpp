@@ -1,13 +1,17 @@
-// `evidential_octomap calibrate`: fit the read-out cap of a dempster map (SemanticConfig::
-// evidence_cap) on labelled scans of a user's own network (a validation split). The scans are
-// mapped once as `map` maps them; the cap that minimises the Brier score of the map on their GT
-// points (golden-section search over ln cap) is written as a parameter file that the node loads
-// (rosparam: `evidence_cap`), `map` and `eval` read (--calibration FILE) and Python reads
-// (evidential_octomap.read_calibration). Without it the cap follows the evidence
-// (SemanticConfig::kAdaptiveCap), with constants chosen across datasets. A fit on a few scans
-// can be noise (docs/results_calibrate.md), so the file keeps the adaptive cap (-1) unless the
-// fitted one has the lower Brier score beyond the 95 % paired-bootstrap interval over 10 m
-// blocks of these scans (--keep-fit writes the fit regardless).
+// `evidential_octomap calibrate`: fit the read-out of a dempster map on labelled scans of a
+// user's own network (a validation split) and write the calibration file (calibration_file.h)
+// that the node loads (config:=), `map`/`eval`/`compare --calibration FILE` and Python's
+// read_calibration read. Two fits, on the scans mapped as `map` maps them:
+//   the read-out cap (SemanticConfig::evidence_cap): the cap of lowest Brier score on their GT
+//     points (golden-section search over ln cap). A fit on a few scans can be noise
+//     (docs/results_calibrate.md), so the file keeps the adaptive cap (-1) unless the fitted
+//     one is better beyond the 95 % paired-bootstrap interval over 10 m blocks (--keep-fit
+//     writes it regardless);
+//   the error model (error_model.h): P(label wrong) from everything the voxel holds, on the
+//     queries of two maps (every scan mapped and queried; the odd scans mapped, the even ones
+//     queried, so that it also sees voxels whose points were not the query's), the penalty
+//     chosen on held-out folds of 10 m blocks; its out-of-fold AUROC is printed beside each
+//     single output's on the same queries.
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -20,7 +24,10 @@
 #include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/evaluation/metrics.h"
 #include "evidential_octomap/evaluation/paired_bootstrap.h"
+#include "evidential_octomap/calibration_file.h"
+#include "evidential_octomap/error_model.h"
 #include "evidential_octomap/io.h"
+#include "evidential_octomap/safe_key.h"
 #include "pipeline.h"
 
 namespace evidential_octomap::tools {
@@ -35,6 +42,7 @@ struct CalibrateOptions {
   EvidenceOptions evidence;
   std::string evidence_name = "file";
   bool keep_fit = false;
+  bool error_model = true;
   bool quiet = false;
 };
 
@@ -109,25 +117,101 @@ std::string differenceText(const BootstrapInterval& d) {
   return text.str();
 }
 
-std::string calibrationFile(const std::string& data, size_t scans, size_t queries,
-                            const EvidenceOptions& ev, const CapFit& fit) {
-  std::ostringstream file;
-  file << std::setprecision(4)
-       << "# evidential_octomap read-out calibration, fitted by `evidential_octomap calibrate` on\n"
-       << "# " << data << " (" << scans << " scans, " << queries << " GT points, evidence "
+// The error model's rows: each labelled query's voxel features, whether its label is wrong and
+// its 10 m block (the fold).
+void addErrorRows(const EvidentialOcTree& tree, const std::vector<Query>& queries,
+                  int ignore_class, std::vector<ErrorRow>* rows) {
+  size_t blocks = 0;
+  const std::vector<uint32_t> block = spatialBlocks(queries, BootstrapSettings().block_size, &blocks);
+  const int C = tree.numClasses();
+  float payload[EvidentialOcTree::kMaxClasses];
+  for (size_t i = 0; i < queries.size(); ++i) {
+    const Query& q = queries[i];
+    octomap::OcTreeKey key;
+    if (q.gt < 0 || q.gt >= C || q.gt == ignore_class) continue;
+    if (!safeCoordToKey(tree, q.point_W, &key) || !tree.answerPayload(key, payload)) continue;
+    const VoxelOpinion o = tree.rule().readout(payload, C);
+    if (o.label < 0) continue;
+    rows->push_back({ErrorModel::features(payload, o, C), o.label, o.label != q.gt, block[i]});
+  }
+}
+
+// Out-of-fold AUROC of the model and of each single output on the same rows.
+struct ErrorModelReport {
+  size_t rows = 0, wrong = 0;
+  double model_auroc = 0.0;
+  std::vector<std::pair<std::string, double>> single;  // output, AUROC
+  std::string text() const {
+    std::ostringstream t;
+    t << std::setprecision(3) << "error model, AUROC of wrong labels on held-out 10 m blocks ("
+      << rows << " voxel queries, " << wrong << " wrong): model " << model_auroc;
+    for (const auto& [name, value] : single) t << ", " << name << " " << value;
+    return t.str();
+  }
+};
+
+ErrorModelReport reportOf(const std::vector<ErrorRow>& rows, const std::vector<double>& oof) {
+  ErrorModelReport r;
+  std::vector<uint8_t> wrong(rows.size());
+  std::vector<float> score(rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) wrong[i] = rows[i].wrong, r.wrong += rows[i].wrong;
+  r.rows = rows.size();
+  for (size_t i = 0; i < rows.size(); ++i) score[i] = float(oof[i]);
+  r.model_auroc = auroc(score, wrong);
+  // Each feature in the direction in which it flags errors (label_share: low is worse).
+  for (int f = 0; f < ErrorModel::kNumFeatures; ++f) {
+    const std::string name = ErrorModel::featureNames()[f];
+    if (name == "evidence_mass") continue;  // a size, not an uncertainty
+    const double sign = name == "label_share" ? -1.0 : 1.0;
+    for (size_t i = 0; i < rows.size(); ++i) score[i] = float(sign * rows[i].x[f]);
+    r.single.emplace_back(name, auroc(score, wrong));
+  }
+  return r;
+}
+
+struct ErrorModelFitRun {
+  std::shared_ptr<const ErrorModel> model;
+  ErrorModelReport report;
+};
+
+ErrorModelFitRun fitErrorModelOn(const std::vector<Scan>& scans,
+                                 const std::vector<std::vector<float>>& evidence,
+                                 const ClassTable& classes, const SemanticConfig& config,
+                                 double resolution, const EvidentialOcTree& all_scans_map,
+                                 const std::vector<Query>& all_queries, bool progress) {
+  std::vector<ErrorRow> rows;
+  addErrorRows(all_scans_map, all_queries, classes.ignore_class, &rows);
+  std::vector<size_t> odd, even;
+  for (size_t s = 0; s < scans.size(); ++s) (s % 2 ? odd : even).push_back(s);
+  if (!odd.empty() && !even.empty()) {
+    const MapRun half = runMapping(scans, odd, evidence, classes, config, resolution, progress,
+                                   "mapping the odd scans");
+    addErrorRows(*half.tree, buildQueries(scans, even, classes.ignore_class, nullptr, nullptr),
+                 classes.ignore_class, &rows);
+  }
+  const ErrorModelFitResult fit = fitErrorModel(rows, classes.numClasses());
+  return {std::make_shared<const ErrorModel>(fit.model), reportOf(rows, fit.out_of_fold)};
+}
+
+std::string fileComment(const std::string& data, size_t scans, size_t queries,
+                        const EvidenceOptions& ev, const CapFit& fit,
+                        const ErrorModelFitRun& error) {
+  std::ostringstream text;
+  text << std::setprecision(4)
+       << "evidential_octomap calibration, fitted by `evidential_octomap calibrate` on\n"
+       << data << " (" << scans << " scans, " << queries << " GT points, evidence "
        << describeEvidence(ev) << ").\n"
-       << "# Fitted cap " << fit.cap << ": Brier score " << fit.brier << "; adaptive cap "
+       << "Fitted cap " << fit.cap << ": Brier score " << fit.brier << "; adaptive cap "
        << fit.adaptive << ": " << fit.adaptive_brier << "; " << differenceText(fit.difference)
        << ".\n"
        << (fit.written == fit.cap ? ""
-                                  : "# The fit is not better beyond that interval on these "
-                                    "scans, so the adaptive cap (-1) is kept; --keep-fit writes "
-                                    "the fit.\n")
-       << "# Load it as node parameters (rosparam load, or the launch files' config:=), pass it\n"
-       << "# to `evidential_octomap map --calibration FILE`, or read it in Python with\n"
-       << "# evidential_octomap.read_calibration(FILE).\n"
-       << "evidence_cap: " << fit.written << "\n";
-  return file.str();
+                                  : "The fit is not better beyond that interval on these scans, "
+                                    "so the adaptive cap (-1) is kept; --keep-fit writes the fit.\n")
+       << (error.model ? error.report.text() + ".\n" : "")
+       << "Load it as node parameters (rosparam load, or the launch files' config:=), pass it\n"
+       << "to `evidential_octomap map --calibration FILE`, or read it in Python with\n"
+       << "evidential_octomap.read_calibration(FILE).";
+  return text.str();
 }
 
 void runCalibrate(const CalibrateOptions& o) {
@@ -136,7 +220,7 @@ void runCalibrate(const CalibrateOptions& o) {
   finishEvidenceOptions(o.evidence_name, o.classes, classes, &ev);
   const Dataset dataset = Dataset::open(o.data, classes, ev.conversion);
   if (!dataset.hasLabels()) throw std::runtime_error(o.data + ": calibrate needs labels/ (GT)");
-  if (o.config.rule != "dempster") throw std::runtime_error("calibrate fits the dempster cap");
+  if (o.config.rule != "dempster") throw std::runtime_error("calibrate fits the dempster rule");
   const std::vector<Scan> scans = loadScans(dataset, o.scans, !o.quiet);
   const Protocol protocol = makeProtocol("reconstruction", scans.size());
   const auto evidence = deriveEvidenceFor(scans, protocol.map_scans, ev, classes, {});
@@ -145,13 +229,29 @@ void runCalibrate(const CalibrateOptions& o) {
   const std::vector<Query> queries =
       buildQueries(scans, protocol.query_scans, classes.ignore_class, nullptr, nullptr);
   const CapFit fit = fitCap(run.tree.get(), queries, classes.ignore_class, o.keep_fit);
-  writeFileAtomically(o.out, calibrationFile(o.data, scans.size(), queries.size(), ev, fit));
+  SemanticConfig config = o.config;
+  config.evidence_cap = fit.written;
+  setCap(run.tree.get(), fit.written);
+  ErrorModelFitRun error;
+  if (o.error_model) {
+    error = fitErrorModelOn(scans, evidence, classes, config, o.resolution, *run.tree, queries,
+                            !o.quiet);
+  }
+  Calibration calibration;
+  calibration.rule = config.rule;
+  calibration.classes = classes.names;
+  calibration.evidence_cap = fit.written;
+  calibration.error_model = error.model;
+  writeFileAtomically(o.out, calibrationText(calibration, fileComment(o.data, scans.size(),
+                                                                        queries.size(), ev, fit,
+                                                                        error)));
   std::cout << std::setprecision(4) << "evidence cap " << fit.cap << ": Brier " << fit.brier
             << " (the adaptive cap " << fit.adaptive << " gives " << fit.adaptive_brier << ")\n"
             << differenceText(fit.difference) << "\nwrote evidence_cap: " << fit.written
             << (fit.written == fit.cap ? ""
                                        : " (adaptive: the fit is not better beyond the interval)")
-            << " to " << o.out << "\n";
+            << "\n"
+            << (error.model ? error.report.text() + "\n" : "") << "wrote " << o.out << "\n";
 }
 
 }  // namespace
@@ -160,8 +260,9 @@ void addCalibrateCommand(CLI::App& app) {
   auto o = std::make_shared<CalibrateOptions>();
   CLI::App* cmd = app.add_subcommand(
       "calibrate",
-      "Fit the dempster read-out cap on labelled scans of your own network (a validation "
-      "split) and write it as a parameter file for the node (and --evidence-cap for map)");
+      "Fit the dempster read-out cap and the map's error probability on labelled scans of your "
+      "own network (a validation split) and write the calibration file that the node, map, "
+      "eval, compare and Python read");
   addDataOptions(cmd, &o->data, "Dataset directory with labels/ and evidence", &o->classes);
   cmd->add_option("--out", o->out, "Parameter file to write")->capture_default_str();
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
@@ -171,6 +272,8 @@ void addCalibrateCommand(CLI::App& app) {
   cmd->add_flag("--keep-fit", o->keep_fit,
                 "Write the fitted cap even when its Brier score is not lower than the adaptive "
                 "cap's beyond the 95 % bootstrap interval (by default the file then keeps -1)");
+  cmd->add_flag("!--no-error-model", o->error_model,
+                "Fit the read-out cap only (the map's error probability stays 1 - max p)");
   cmd->add_flag("-q,--quiet", o->quiet, "No progress bars");
   cmd->callback([o]() { runCalibrate(*o); });
 }

@@ -1,4 +1,5 @@
 #include <filesystem>
+#include <iostream>
 #include <stdexcept>
 
 #include "evidential_octomap/calibration_file.h"
@@ -51,15 +52,38 @@ void addConfigOptions(CLI::App* cmd, SemanticConfig* c, double* resolution) {
   }
 }
 
-void addCalibrationOption(CLI::App* cmd, double* evidence_cap) {
-  CLI::Option* calibration =
+void addCalibrationOption(CLI::App* cmd, std::shared_ptr<const Calibration>* calibration) {
+  CLI::Option* option =
       cmd->add_option_function<std::string>(
              "--calibration",
-             [evidence_cap](const std::string& path) { *evidence_cap = readCalibrationCap(path); },
-             "Read the dempster read-out cap from a file written by `calibrate` (instead of "
-             "--evidence-cap)")
+             [calibration](const std::string& path) {
+               *calibration = std::make_shared<const Calibration>(readCalibration(path));
+             },
+             "Read the read-out cap and the error model from a file written by `calibrate` "
+             "(instead of --evidence-cap)")
           ->check(CLI::ExistingFile);
-  if (CLI::Option* cap = cmd->get_option_no_throw("--evidence-cap")) calibration->excludes(cap);
+  if (CLI::Option* cap = cmd->get_option_no_throw("--evidence-cap")) option->excludes(cap);
+}
+
+void useCalibration(const std::shared_ptr<const Calibration>& calibration,
+                    const ClassTable& classes, SemanticConfig* config) {
+  if (!calibration) return;
+  const std::string problem = calibration->problemWith(classes.names, config->rule);
+  if (!problem.empty()) throw std::runtime_error(problem);
+  config->evidence_cap = calibration->evidence_cap;
+}
+
+void warnIfUncalibrated(const EvidenceOptions& evidence, bool calibrated) {
+  static bool warned = false;
+  const bool network =
+      evidence.source == EvidenceSource::kFile || evidence.source == EvidenceSource::kLearned;
+  if (calibrated || !network || warned) return;
+  warned = true;
+  std::cerr << "note: the map's error probability is uncalibrated (1 - max p of the read-out); "
+               "fit it on labelled scans of this network with\n  evidential_octomap calibrate "
+               "--data VALIDATION_DIR --classes CLASSES.yaml --evidence file --out "
+               "calibration.yaml\nand pass --calibration calibration.yaml "
+               "(docs/calibration.md)\n";
 }
 
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_name) {

@@ -2,9 +2,12 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "evidential_octomap/calibration_file.h"
+#include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidence/evidence_sources.h"
 #include "evidential_octomap/semantic_config.h"
 
@@ -32,8 +35,15 @@ void addDataOptions(CLI::App* cmd, std::string* data, const std::string& data_he
                     std::string* classes);
 // Mapping parameters of SemanticConfig plus the tree resolution.
 void addConfigOptions(CLI::App* cmd, SemanticConfig* config, double* resolution);
-// `--calibration FILE` (a file `calibrate` wrote): sets *evidence_cap; excludes --evidence-cap.
-void addCalibrationOption(CLI::App* cmd, double* evidence_cap);
+// `--calibration FILE` (a file `calibrate` wrote, read when parsed): excludes --evidence-cap.
+void addCalibrationOption(CLI::App* cmd, std::shared_ptr<const Calibration>* calibration);
+// The calibration's cap in `config` and its class table checked against `classes` (throws
+// std::runtime_error naming both); does nothing without a calibration.
+void useCalibration(const std::shared_ptr<const Calibration>& calibration,
+                    const ClassTable& classes, SemanticConfig* config);
+// Prints once to stderr, for network evidence (file, learned) read without a calibration, that
+// the map's error probability is uncalibrated and the command that fits it.
+void warnIfUncalibrated(const EvidenceOptions& evidence, bool calibrated);
 // --evidence, -E, --knn-k, --knn-radius, --learned-model; the source name is parsed into
 // options->source, and an empty model path set to its default, by finishEvidenceOptions().
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* options, std::string* source_name);

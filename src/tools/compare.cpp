@@ -38,6 +38,7 @@ struct CompareOptions {
   EvidenceOptions evidence;
   bool quiet = false;
   BootstrapSettings bootstrap;
+  std::shared_ptr<const Calibration> calibration;  // adds a dempster+calibration row
 };
 
 struct Section {
@@ -244,7 +245,7 @@ class SectionRun {
     const std::vector<octomap::OcTreeKey> endpoints =
         endpointKeys(scans_, protocol_.map_scans, o_.resolution);
     for (const std::string& v : variants) {
-      scored.push_back(runVariant(source, ev, evidence, input, endpoints, v, out));
+      runVariant(source, ev, evidence, input, endpoints, v, &scored, out);
     }
     addBootstrapRows(source, scored, bootstrap_, context_, &sec_, &out->bootstrap);
   }
@@ -269,15 +270,32 @@ class SectionRun {
     scored->push_back(std::move(row));
   }
 
-  // One map: its report (JSON), its table rows, its block scores for the bootstrap.
-  ScoredRow runVariant(const std::string& source, const EvidenceOptions& ev,
-                       const std::vector<std::vector<float>>& evidence,
-                       const QualityMetrics& input,
-                       const std::vector<octomap::OcTreeKey>& endpoints, const std::string& v,
-                       CompareResults* out) {
+  // One map: its rows; with --calibration, default dempster's map read with the file is a row
+  // of its own ("dempster+calibration").
+  void runVariant(const std::string& source, const EvidenceOptions& ev,
+                  const std::vector<std::vector<float>>& evidence, const QualityMetrics& input,
+                  const std::vector<octomap::OcTreeKey>& endpoints, const std::string& v,
+                  std::vector<ScoredRow>* scored, CompareResults* out) {
     const SemanticConfig config = variantConfig(v, o_.base);
     MapRun run = runMapping(scans_, protocol_.map_scans, evidence, classes_, config,
                             o_.resolution, !o_.quiet, protocol_.name + " " + source + " " + v);
+    scored->push_back(scoreMap(source, ev, input, endpoints, v, run, out));
+    if (v != "dempster" || !o_.calibration) return;
+    const std::string problem = o_.calibration->problemWith(classes_.names, config.rule);
+    if (!problem.empty()) {
+      sec_.notes.push_back("No dempster+calibration row: " + problem + ".");
+      return;
+    }
+    applyCalibration(*o_.calibration, run.tree.get());
+    scored->push_back(scoreMap(source, ev, input, endpoints, "dempster+calibration", run, out));
+  }
+
+  // A map's report (JSON), its table rows, its block scores for the bootstrap.
+  ScoredRow scoreMap(const std::string& source, const EvidenceOptions& ev,
+                     const QualityMetrics& input,
+                     const std::vector<octomap::OcTreeKey>& endpoints, const std::string& v,
+                     const MapRun& run, CompareResults* out) {
+    const SemanticConfig& config = run.tree->config();
     std::vector<QueryOutcome> outcomes;
     RunReport r = report(source, ev, config, run);
     r.map = evaluateMap(*run.tree, queries_, classes_.ignore_class, &outcomes);
@@ -564,6 +582,7 @@ void addCompareCommand(CLI::App& app) {
   addRellisOptions(cmd, o.get());
   addRunOptions(cmd, o.get());
   addPlanOptions(cmd, o.get());
+  addCalibrationOption(cmd, &o->calibration);
   cmd->callback([o, cmd]() {
     o->plan.explicit_selection =
         cmd->count("--sources") + cmd->count("--variants") + cmd->count("--protocols") > 0;

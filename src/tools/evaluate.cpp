@@ -22,6 +22,7 @@ struct EvalOptions {
   bool synthetic = false;
   NoiseModel noise;
   double evidence_cap = -2.0;  // < -1: the map's own
+  std::shared_ptr<const Calibration> calibration;
 };
 
 void runEval(const EvalOptions& o) {
@@ -36,6 +37,7 @@ void runEval(const EvalOptions& o) {
     config.evidence_cap = o.evidence_cap;
     tree->setConfig(config);
   }
+  if (o.calibration) applyCalibration(*o.calibration, tree.get());
   EvidenceOptions ev = o.evidence;
   finishEvidenceOptions(o.evidence_name, o.classes, classes, &ev);
   const Dataset dataset = Dataset::open(o.data, classes, ev.conversion);
@@ -108,7 +110,7 @@ void addEvalCommand(CLI::App& app) {
   cmd->add_option("--evidence-cap", o->evidence_cap,
                   "dempster: read the opinions with this evidence cap instead of the map's own "
                   "(0: no cap); the stored evidence is unchanged");
-  addCalibrationOption(cmd, &o->evidence_cap);
+  addCalibrationOption(cmd, &o->calibration);
   cmd->add_flag("--synthetic-predictions", o->synthetic,
                 "Input predictions = GT with the synthetic noise model (as `map`)");
   cmd->add_option("--noise-point-rate", o->noise.point_rate, "Synthetic point-noise rate")

@@ -30,6 +30,7 @@ struct MapOptions {
   bool quiet = false;
   size_t autosave_every = 0;
   LocalMapOptions local_map;
+  std::shared_ptr<const Calibration> calibration;
 };
 
 void runMap(const MapOptions& o) {
@@ -49,6 +50,9 @@ void runMap(const MapOptions& o) {
   std::string predictions_note;
   if (o.synthetic) predictions_note = useSyntheticPredictions(&scans, classes, o.noise);
   const Protocol protocol = makeProtocol(o.protocol, scans.size());
+  SemanticConfig config = o.config;
+  useCalibration(o.calibration, classes, &config);
+  warnIfUncalibrated(ev, o.calibration && o.calibration->error_model);
   const auto evidence =
       deriveEvidenceFor(scans, protocol.map_scans, ev, classes, protocol.query_scans);
   Autosave autosave;
@@ -58,8 +62,9 @@ void runMap(const MapOptions& o) {
   }
   LocalMapOptions local_map = o.local_map;
   if (local_map.tile_directory.empty()) local_map.tile_directory = o.out + "/tiles";
-  MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, o.config, o.resolution,
+  MapRun run = runMapping(scans, protocol.map_scans, evidence, classes, config, o.resolution,
                           !o.quiet, "mapping", autosave, local_map);
+  if (o.calibration) applyCalibration(*o.calibration, run.tree.get());
   std::vector<float> query_evidence;
   const std::vector<Query> queries =
       buildQueries(scans, protocol.query_scans, classes.ignore_class, &evidence, &query_evidence);
@@ -69,7 +74,7 @@ void runMap(const MapOptions& o) {
   r.protocol = protocol.name;
   for (size_t s : protocol.map_scans) r.map_scans.push_back(scans[s].name);
   for (size_t s : protocol.query_scans) r.query_scans.push_back(scans[s].name);
-  r.variant = variantName(o.config);
+  r.variant = variantName(config);
   r.evidence_source = evidenceSourceName(ev.source);
   r.evidence_description = describeEvidence(ev);
   r.evidence_derived = derivedFromHardLabels(ev.source);
@@ -100,7 +105,10 @@ void runMap(const MapOptions& o) {
     writePng(o.out + "/semantic.png",
              renderSemantic(*run.tree, classes, grid, caption("semantic map")));
     writePng(o.out + "/uncertainty.png",
-             renderUncertainty(*run.tree, grid, caption("P(label wrong) = 1 - max p")));
+             renderUncertainty(*run.tree, grid,
+                               caption(run.tree->errorModel()
+                                           ? "P(label wrong), calibrated error model"
+                                           : "P(label wrong) = 1 - max p (uncalibrated)")));
     writePng(o.out + "/error.png",
              renderError(*run.tree, queries, grid, caption("errors of the GT queries")));
     writePng(o.out + "/quality.png",
@@ -142,7 +150,7 @@ void addMapCommand(CLI::App& app) {
   cmd->add_option("--scans", o->scans, "Use only the first N scans (0: all)")
       ->capture_default_str();
   addConfigOptions(cmd, &o->config, &o->resolution);
-  addCalibrationOption(cmd, &o->config.evidence_cap);
+  addCalibrationOption(cmd, &o->calibration);
   addEvidenceOptions(cmd, &o->evidence, &o->evidence_name);
   cmd->add_flag("--synthetic-predictions", o->synthetic,
                 "Replace predictions by GT corrupted with the synthetic noise model (for data "

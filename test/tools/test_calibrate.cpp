@@ -90,7 +90,7 @@ TEST_F(Calibrate, FitsTheCapOfLowestBrierScore) {
 
 TEST_F(Calibrate, MapAndEvalReadTheFileItWrites) {
   const std::string dir = dataset("x5", kOverconfidentX5);
-  const Fit fit = calibrate(dir, "--keep-fit");
+  const Fit fit = calibrate(dir, "--keep-fit --no-error-model");
   EXPECT_EQ(fit.written, fit.cap);
   const std::string file = dir + "/calibration.yaml";
   const CliResult mapped = runCli("map" + data(dir) + "--calibration " + file + " -q --out " + dir + "/cal");
@@ -108,7 +108,7 @@ TEST_F(Calibrate, MapAndEvalReadTheFileItWrites) {
 // evidence need a much lower cap than the adaptive one (docs/results_calibrate.md).
 TEST_F(Calibrate, TheFileKeepsTheAdaptiveCapUnlessTheFitIsBetterBeyondItsInterval) {
   const std::string dir = dataset("x5", kOverconfidentX5);
-  const Fit within = calibrate(dir);
+  const Fit within = calibrate(dir, "--no-error-model");
   EXPECT_GE(within.difference_upper, 0.0);
   EXPECT_EQ(within.written, -1.0);
   const CliResult mapped = runCli("map" + data(dir) + "--calibration " + dir +
@@ -121,6 +121,97 @@ TEST_F(Calibrate, TheFileKeepsTheAdaptiveCapUnlessTheFitIsBetterBeyondItsInterva
                                    dir_ + "/kitti_calibration.yaml", "");
   EXPECT_LT(beyond.difference_upper, 0.0);
   EXPECT_EQ(beyond.written, beyond.cap);
+}
+
+// A network that is confidently wrong in whole regions, weakens with range and errs at class
+// borders (SYNTHETIC). calibrate reports the error model's AUROC on held-out 10 m blocks
+// beside each single output's on the same voxel queries; a map of another sequence of the same
+// network read with the file ranks its errors by error_probability better than by any other
+// output, and is better calibrated than without the file.
+const char* kConfidentlyWrong =
+    "--scene rocky --network poor --wrong-rate 0.08 --wrong-boost 4 --range-weight 1.5 "
+    "--border-weight 1.5";
+
+TEST_F(Calibrate, TheErrorModelBeatsEverySingleOutputOnHeldOutBlocks) {
+  const std::string dir = dataset("wrong_regions", std::string(kConfidentlyWrong) + " --seed 5");
+  const CliResult r = runCli("calibrate" + data(dir) + "-q --out " + dir + "/calibration.yaml");
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("wrong\\): model ([0-9.]+)((, \\w+ [0-9.]+)+)")))
+      << r.output;
+  const double model = std::stod(m[1]);
+  const std::string singles = m[2];
+  size_t outputs = 0;
+  const std::regex single(", (\\w+) ([0-9.]+)");
+  for (auto it = std::sregex_iterator(singles.begin(), singles.end(), single);
+       it != std::sregex_iterator(); ++it, ++outputs) {
+    EXPECT_GT(model, std::stod((*it)[2]) + 0.01) << (*it)[1] << " in " << r.output;
+  }
+  EXPECT_EQ(outputs, 6u) << r.output;
+}
+
+TEST_F(Calibrate, AMapReadWithTheFileRanksAndCalibratesItsErrorsBetter) {
+  const std::string fit_dir = dataset("wrong_regions", std::string(kConfidentlyWrong) + " --seed 5");
+  const std::string file = fit_dir + "/calibration.yaml";
+  ASSERT_EQ(runCli("calibrate" + data(fit_dir) + "-q --out " + file).status, 0);
+  const std::string dir = dataset("wrong_regions_other", std::string(kConfidentlyWrong) + " --seed 6");
+  const auto metrics = [&](const std::string& extra, const std::string& out) {
+    const CliResult r = runCli("map" + data(dir) + "--no-render -q --out " + dir + out + extra);
+    EXPECT_EQ(r.status, 0) << r.output;
+    std::ifstream in(dir + out + "/metrics.json");
+    return nlohmann::json::parse(in)["map"];
+  };
+  const nlohmann::json plain = metrics("", "/plain"), calibrated = metrics(" --calibration " + file, "/cal");
+  const auto auroc = [](const nlohmann::json& m, const char* output) {
+    return m["error_detection"][output]["auroc"].get<double>();
+  };
+  for (const char* output : {"u", "conflict", "1-max_p", "dissonance"}) {
+    EXPECT_GT(auroc(calibrated, "error_probability"), auroc(calibrated, output) + 0.02) << output;
+  }
+  EXPECT_EQ(auroc(plain, "error_probability"), auroc(plain, "1-max_p"));
+  EXPECT_LT(calibrated["brier"].get<double>(), plain["brier"].get<double>());
+  EXPECT_LT(calibrated["ece"].get<double>(), plain["ece"].get<double>());
+  EXPECT_EQ(calibrated["miou_all_queries"], plain["miou_all_queries"]);  // the labels are the map's
+}
+
+// map says once, on network evidence without a file, that the error probability is
+// uncalibrated and how to fit it; not with a file, not for evidence derived from hard labels.
+TEST_F(Calibrate, MapSaysWhenItsErrorProbabilityIsUncalibrated) {
+  const std::string dir = dataset("x5", kOverconfidentX5);
+  const std::string note = "error probability is uncalibrated";
+  const CliResult plain = runCli("map" + data(dir) + "--no-render -q --out " + dir + "/warn");
+  ASSERT_EQ(plain.status, 0) << plain.output;
+  const size_t at = plain.output.find(note);
+  ASSERT_NE(at, std::string::npos) << plain.output;
+  EXPECT_EQ(plain.output.find(note, at + 1), std::string::npos) << "printed twice";
+  EXPECT_NE(plain.output.find("evidential_octomap calibrate"), std::string::npos);
+  const std::string file = dir + "/calibration_warn.yaml";
+  ASSERT_EQ(runCli("calibrate" + data(dir) + "-q --out " + file).status, 0);
+  const CliResult calibrated =
+      runCli("map" + data(dir) + "--calibration " + file + " --no-render -q --out " + dir + "/warn");
+  EXPECT_EQ(calibrated.output.find(note), std::string::npos) << calibrated.output;
+  const CliResult derived = runCli("map --data " + kittiDir() + " --classes " + kittiClasses() +
+                                   " --evidence onehot --scans 1 --no-render -q --out " + dir +
+                                   "/warn_onehot");
+  ASSERT_EQ(derived.status, 0) << derived.output;
+  EXPECT_EQ(derived.output.find(note), std::string::npos) << derived.output;
+}
+
+// A file fitted for another class table, or read by a map of another rule, is refused naming
+// both.
+TEST_F(Calibrate, AFileOfOtherClassesOrAnotherRuleIsRefused) {
+  const std::string dir = dataset("x5", kOverconfidentX5);
+  const std::string file = dir + "/calibration_refused.yaml";
+  ASSERT_EQ(runCli("calibrate" + data(dir) + "-q --out " + file).status, 0);
+  const CliResult kitti = runCli("map --data " + kittiDir() + " --classes " + kittiClasses() +
+                                 " --evidence onehot --scans 1 --calibration " + file +
+                                 " --no-render -q --out " + dir + "/refused");
+  EXPECT_NE(kitti.status, 0);
+  EXPECT_NE(kitti.output.find("the calibration was fitted for"), std::string::npos) << kitti.output;
+  const CliResult sbki = runCli("map" + data(dir) + "--rule sbki --calibration " + file +
+                                " --no-render -q --out " + dir + "/refused");
+  EXPECT_NE(sbki.status, 0);
+  EXPECT_NE(sbki.output.find("fitted for the dempster rule"), std::string::npos) << sbki.output;
 }
 
 TEST_F(Calibrate, ABadCalibrationFileIsRefusedWithItsLine) {
