@@ -17,6 +17,7 @@ ROS 1 / ROS 2 bags and a live Foxglove view, no ROS needed: ``python -m evidenti
 from pathlib import Path
 
 from ._core import (
+    Calibration,
     ClassTable,
     ColorOcTree,
     Dataset,
@@ -41,6 +42,7 @@ from ._core import (
 )
 
 __all__ = [
+    "Calibration",
     "ClassTable",
     "ColorOcTree",
     "Dataset",

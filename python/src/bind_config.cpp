@@ -1,5 +1,6 @@
 // SemanticConfig: one attribute per setting of settings.h (defaults from the C++ struct).
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
 
 #include <sstream>
 
@@ -47,10 +48,24 @@ void bindConfig(nb::module_& m) {
         setting.field);
   }
   m.attr("EVIDENCE_MAGNITUDE") = kEvidenceMagnitude;
-  m.def("read_calibration", &evidential_octomap::readCalibrationCap, nb::arg("path"),
-        "The dempster read-out cap of a file written by `evidential_octomap calibrate` (-1: "
-        "the adaptive cap): SemanticConfig(evidence_cap=read_calibration(path)). Raises "
-        "RuntimeError (naming the file and line) for an unreadable or invalid file.");
+  nb::class_<Calibration>(m, "Calibration",
+                          "A file written by `evidential_octomap calibrate` "
+                          "(docs/calibration.md): the read-out cap and the error model of one "
+                          "rule and class table. tree.apply_calibration(read_calibration(path)).")
+      .def_ro("version", &Calibration::version)
+      .def_ro("rule", &Calibration::rule, "The rule it was fitted for.")
+      .def_ro("classes", &Calibration::classes, "The class names it was fitted for, in order.")
+      .def_ro("evidence_cap", &Calibration::evidence_cap, "-1: the adaptive cap.")
+      .def_prop_ro(
+          "error_model_terms",
+          [](const Calibration& c) {
+            return c.error_model ? c.error_model->terms() : std::vector<std::string>();
+          },
+          "The error model's terms ([] when the file has none).")
+      .def_ro("source", &Calibration::source);
+  m.def("read_calibration", &readCalibration, nb::arg("path"),
+        "Reads a calibration file. Raises RuntimeError (naming the file and line) for an "
+        "unreadable or invalid file.");
 }
 
 }  // namespace evidential_octomap::python

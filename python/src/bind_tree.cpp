@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "bindings.h"
+#include "evidential_octomap/calibration_file.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
 #include "evidential_octomap/local_map.h"
@@ -109,8 +110,8 @@ void bindResults(nb::module_& m) {
               "(N,) float32 in [0, 1): share of the fused evidence that disagreed "
               "(VoxelOpinion::conflict).")
       .def_ro("error_probability", &QueryResult::error_probability, kShared,
-              "(N,) float32: the map's probability that the label is wrong, 1 - max_c p_c "
-              "(dempster p = belief + u / C); the default uncertainty of the views.")
+              "(N,) float32: the map's probability that the label is wrong: the calibration's "
+              "error model when one is applied, else 1 - max_c p_c (dempster p = belief + u / C).")
       .def_ro("occupied", &QueryResult::occupied, kShared,
               "(N,) bool: the voxel is known and occupied.")
       .def_ro("known", &QueryResult::known, kShared, "(N,) bool: the voxel has been observed.");
@@ -122,7 +123,7 @@ void bindResults(nb::module_& m) {
       .def_ro("uncertainty", &Leaves::uncertainty, kShared, "(M,) float32.")
       .def_ro("conflict", &Leaves::conflict, kShared, "(M,) float32.")
       .def_ro("error_probability", &Leaves::error_probability, kShared,
-              "(M,) float32: 1 - max_c p_c, the probability that the label is wrong.")
+              "(M,) float32: the probability that the label is wrong (as QueryResult's).")
       .def_ro("belief", &Leaves::belief, kShared, "(M, C) float32.");
   nb::class_<InsertStats>(m, "InsertStats", "What one insert_scan did.")
       .def_ro("points_in", &InsertStats::points_in)
@@ -268,6 +269,15 @@ void bindTree(nb::module_& m) {
       .def("set_config", &Tree::setConfig, nb::arg("config"),
            "Replaces the parameters; a rule change is refused while the map holds evidence.")
       .def_prop_ro("rule", [](const Tree& t) { return t.rule().name(); })
+      .def(
+          "apply_calibration",
+          [](Tree& t, const Calibration& calibration) { applyCalibration(calibration, &t); },
+          nb::arg("calibration"),
+           "Reads the map with a Calibration's cap and error model (error_probability becomes "
+           "the model's); raises RuntimeError when it was fitted for other classes or rule.")
+      .def_prop_ro(
+          "calibrated", [](const Tree& t) { return t.errorModel() != nullptr; },
+          "An error model is attached (apply_calibration).")
       .def_prop_ro("effective_evidence_cap", &Tree::effectiveEvidenceCap,
                    "The cap dempster opinions are read with now (the adaptive cap's value, or "
                    "the fixed one).")

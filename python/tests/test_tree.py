@@ -239,14 +239,46 @@ def test_unsavable_sensor_model_is_refused_by_the_next_insert_with_the_save_reas
     assert not path.exists()
 
 
-def test_read_calibration_reads_the_cap_calibrate_writes(tmp_path):
+def test_read_calibration_reads_a_cap_only_file(tmp_path):
     path = tmp_path / "calibration.yaml"
     path.write_text("# fitted by evidential_octomap calibrate\nevidence_cap: 6.25\n")
-    cap = eo.read_calibration(str(path))
-    assert cap == 6.25
-    assert eo.SemanticConfig(evidence_cap=cap).evidence_cap == 6.25
-    path.write_text("# the fit was not better: the adaptive cap\nevidence_cap: -1\n")
-    assert eo.read_calibration(str(path)) == -1.0
+    calibration = eo.read_calibration(str(path))
+    assert (calibration.version, calibration.evidence_cap) == (1, 6.25)
+    assert calibration.error_model_terms == []
+    tree = eo.EvidentialOcTree(0.2, 3)
+    tree.apply_calibration(calibration)
+    assert tree.config.evidence_cap == 6.25 and not tree.calibrated
+
+
+def _calibration_file(tmp_path, classes, weights=(0.5, 2.0)):
+    path = tmp_path / "calibration.yaml"
+    path.write_text("calibration_version: 2\ncalibration_rule: dempster\n"
+                    f"calibration_classes: [{', '.join(classes)}]\nevidence_cap: -1\n"
+                    "error_model_terms: [intercept, vacuity]\n"
+                    f"error_model_weights: [{weights[0]}, {weights[1]}]\n")
+    return str(path)
+
+
+def test_an_applied_error_model_is_the_maps_error_probability(tmp_path):
+    tree = eo.EvidentialOcTree(0.2, ["road", "grass", "tree"])
+    points = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], dtype=np.float32)
+    evidence = np.array([[6.0, 1.0, 0.0], [0.5, 0.4, 0.3]], dtype=np.float32)
+    tree.insert_scan(points, evidence)
+    tree.apply_calibration(eo.read_calibration(_calibration_file(tmp_path, tree.class_names)))
+    assert tree.calibrated
+    answer = tree.query(points)
+    # The file's model, written out: P(wrong) = sigmoid(0.5 + 2 ln u).
+    expected = 1.0 / (1.0 + np.exp(-(0.5 + 2.0 * np.log(answer.uncertainty))))
+    np.testing.assert_allclose(answer.error_probability, expected, rtol=1e-5)
+    assert answer.error_probability[0] < answer.error_probability[1]
+
+
+def test_a_calibration_of_other_classes_is_refused(tmp_path):
+    tree = eo.EvidentialOcTree(0.2, ["road", "grass", "tree"])
+    path = _calibration_file(tmp_path, ["road", "grass", "water"])
+    with pytest.raises(RuntimeError, match="water"):
+        tree.apply_calibration(eo.read_calibration(path))
+    assert not tree.calibrated
 
 
 def test_read_calibration_refuses_a_bad_file_with_its_line(tmp_path):
