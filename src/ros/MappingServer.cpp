@@ -80,6 +80,11 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
                                 " disagrees with the class table " + config_.classes + " (" +
                                 std::to_string(classes_.numClasses()) + " classes)");
   config_.num_classes = classes_.numClasses();
+  calibration_ = readCalibrationParams(pnh_, semantic.evidence_cap);
+  if (calibration_) {
+    const std::string problem = calibration_->problemWith(classes_.names, semantic.rule);
+    if (!problem.empty()) throw std::invalid_argument("~calibration: " + problem);
+  }
   read_options_ = cloudReadOptions();
   tree_ = makeTree(semantic);
   if (!config_.map_file.empty()) loadStartupMap();
@@ -221,7 +226,18 @@ std::unique_ptr<EvidentialOcTree> MappingServer::makeTree(const SemanticConfig& 
   } else {
     readOccupancyParams(pnh_, tree.get());
   }
+  attachErrorModel(tree.get());
   return tree;
+}
+
+void MappingServer::attachErrorModel(EvidentialOcTree* tree) const {
+  if (!calibration_ || !calibration_->error_model) return;
+  const std::string problem = calibration_->problemWith(tree->classNames(), tree->rule().name());
+  if (problem.empty()) {
+    tree->setErrorModel(calibration_->error_model);
+  } else {
+    ROS_WARN("%s; this map's error probability is 1 - max p", problem.c_str());
+  }
 }
 
 // --- input (reception thread) -------------------------------------------------------------
@@ -353,6 +369,12 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
     return;
   }
   ++map_changes_;
+  if (!(calibration_ && calibration_->error_model) && scan.source != "label" &&
+      scan.source.rfind("none", 0) != 0) {
+    ROS_WARN_ONCE("the map's error probability is uncalibrated (1 - max p of the read-out): fit "
+                  "it on labelled scans of this network with `evidential_octomap calibrate` "
+                  "and load the file (docs/calibration.md)");
+  }
   const double ms = msSince(t0);
   const auto& t = pending.T_W_S.transform.translation;
   last_origin_W_ = octomap::point3d(t.x, t.y, t.z);
@@ -572,6 +594,7 @@ void MappingServer::adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupan
     map->setConfig(tree_->config());
     map->setSensorModel(tree_->sensorModel());
   }
+  attachErrorModel(map.get());
   tree_ = std::move(map);
   restartLocalMap();
 }

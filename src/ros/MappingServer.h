@@ -110,6 +110,9 @@ class MappingServer {
                                                 bool* occupancy_only) const;
   // Makes `map` the node's map (map mutex held).
   void adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupancy_only);
+  // Reads `tree` with the calibration's error model where it was fitted for the tree's classes
+  // and rule (warns otherwise: the map's error probability is then 1 - max p).
+  void attachErrorModel(EvidentialOcTree* tree) const;
   // A service's path: relative paths are taken from the node's working directory.
   static std::string absolutePath(const std::string& path);
   // Map size into status_ (map mutex held). Counting leaves walks the whole map (tens of ms in a
@@ -146,6 +149,7 @@ class MappingServer {
   // (config_.resolution is only ~resolution, the size of the first map).
   NodeConfig config_;
   ClassTable classes_;
+  std::shared_ptr<const Calibration> calibration_;  // ~calibration_* params; null: none
   CloudReadOptions read_options_;
   std::unique_ptr<EvidentialOcTree> tree_;
   std::unique_ptr<LocalMap> local_map_;  // over tree_, with ~local_map/radius > 0

@@ -27,6 +27,7 @@ void answerQuery(const EvidentialOcTree& tree, const QueryMap::Request& req,
     res->class_names.push_back(o.label >= 0 && o.label < int(names.size()) ? names[o.label] : "");
     res->uncertainties.push_back(o.uncertainty);
     res->conflicts.push_back(o.conflict);
+    res->error_probabilities.push_back(map.rule().errorProbability(o));
     res->occupancy.push_back(node ? static_cast<float>(node->getOccupancy()) : -1.f);
     for (int c = 0; c < C; ++c) res->beliefs.push_back(c < int(o.belief.size()) ? o.belief[c] : 0.f);
   }

@@ -106,6 +106,30 @@ NodeConfig readNodeConfig(const ros::NodeHandle& nh) {
   return c;
 }
 
+std::shared_ptr<const Calibration> readCalibrationParams(const ros::NodeHandle& nh,
+                                                         double evidence_cap) {
+  if (!nh.hasParam("calibration_version") && !nh.hasParam("error_model_terms")) return nullptr;
+  int version = 1;
+  std::string rule = "dempster";
+  std::vector<std::string> classes, terms;
+  std::vector<double> weights;
+  nh.param("calibration_version", version, version);
+  nh.param("calibration_rule", rule, rule);
+  const auto list = [&](const char* name, auto* values) {
+    if (nh.hasParam(name) && !nh.getParam(name, *values))
+      throw std::invalid_argument(std::string("~") + name + " must be a list");
+  };
+  list("calibration_classes", &classes);
+  list("error_model_terms", &terms);
+  list("error_model_weights", &weights);
+  try {
+    return std::make_shared<const Calibration>(makeCalibration(
+        version, rule, classes, evidence_cap, terms, weights, nh.getNamespace() + " params"));
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(std::string("~calibration: ") + e.what());
+  }
+}
+
 void readSemanticConfig(const ros::NodeHandle& nh, double resolution, SemanticConfig* config) {
   SemanticConfig& c = *config;
   for (const Setting& s : settingList()) {  // one ~param per setting, default the struct's

@@ -5,6 +5,7 @@
 // once below.
 #pragma once
 
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -12,6 +13,7 @@
 #include <ros/node_handle.h>
 
 #include "conversions.h"
+#include "evidential_octomap/calibration_file.h"
 #include "evidential_octomap/MappingConfig.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
@@ -71,6 +73,13 @@ struct NodeConfig {
   bool keep_outside_image = false;        // points outside the image: occupancy only, else dropped
   double camera_max_age = 0.2;            // max |t_cloud - t_image| [s]
 };
+
+// The keys of a calibration file (calibration_file.h) as ~params, loaded with rosparam or the
+// launch files' config:= (evidence_cap is the setting's, read with the semantic parameters):
+// null when neither ~calibration_version nor ~error_model_terms is set. Throws
+// std::invalid_argument naming the parameter for a value that does not parse.
+std::shared_ptr<const Calibration> readCalibrationParams(const ros::NodeHandle& nh,
+                                                         double evidence_cap);
 
 // Reads the node's own parameters. Throws std::invalid_argument for values that cannot work.
 NodeConfig readNodeConfig(const ros::NodeHandle& nh);

@@ -256,6 +256,20 @@ TEST_F(MappingNodeTest, QueryReturnsClassBeliefsAndUnknown) {
   EXPECT_FLOAT_EQ(r.uncertainties[1], 1.f);
 }
 
+// calibrated_node.test loads an error model P(wrong) = sigmoid(0.5 + 2 ln u) (~calibrated set);
+// without one the node answers 1 - max p, p = belief + u / C.
+TEST_F(MappingNodeTest, QueryAnswersTheErrorProbabilityOfTheCalibration) {
+  insert(lidarCloud(scene()));
+  const auto r = query({gp(5.05, 0.0, 0.75)});
+  ASSERT_EQ(r.error_probabilities.size(), 1u);
+  ASSERT_EQ(r.labels[0], kBuilding);
+  const float u = r.uncertainties[0];
+  const float expected = ros::NodeHandle("~").param("calibrated", false)
+                             ? 1.f / (1.f + std::exp(-(0.5f + 2.f * std::log(u))))
+                             : 1.f - (r.beliefs[kBuilding] + u / kC);
+  EXPECT_NEAR(r.error_probabilities[0], expected, 1e-4);
+}
+
 TEST_F(MappingNodeTest, SaveMapWritesAnOtThatReadsBackAsEvidentialOcTree) {
   insert(lidarCloud(scene()));
   const std::string path = "/tmp/evidential_octomap_rostest_" + std::to_string(getpid()) + ".ot";
