@@ -55,7 +55,9 @@ std::vector<Query> makeQueries(const std::optional<PointsIn>& points, const Labe
 void bindResults(nb::module_& m) {
   nb::class_<ErrorDetection>(m, "ErrorDetection",
                              "How well one uncertainty output flags wrong labels.")
-      .def_ro("output", &ErrorDetection::output, "'u', 'conflict', '1-max_p' or 'dissonance'.")
+      .def_ro("output", &ErrorDetection::output,
+              "'u', 'conflict', '1-max_p', 'dissonance' or 'error_probability' (the "
+              "calibration's error model where the map has one, else 1-max_p).")
       .def_ro("auroc", &ErrorDetection::auroc)
       .def_ro("aurc", &ErrorDetection::aurc)
       .def_ro("error_rate_by_decile", &ErrorDetection::error_rate_by_decile)

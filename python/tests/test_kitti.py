@@ -66,7 +66,8 @@ def test_map_metrics_equal_a_numpy_recomputation(kitti_scans, kitti_classes):
     p = answer.belief + answer.uncertainty[:, None] / 20
     p[~labelled] = 1.0 / 20
     assert quality.brier == pytest.approx(((p - np.eye(20)[gt]) ** 2).sum(axis=1).mean(), rel=1e-4)
-    assert list(quality.error_detection) == ["u", "conflict", "1-max_p", "dissonance"]
+    assert list(quality.error_detection) == ["u", "conflict", "1-max_p", "dissonance",
+                                            "error_probability"]
     assert 0 <= quality.error_detection["u"].auroc <= 1
     predicted = scan.predicted[keep]
     hard = eo.evaluate_input(gt, predicted, num_classes=20, ignore_class=kitti_classes.ignore_class)

@@ -174,7 +174,8 @@ TEST_F(CliEndToEnd, MetricsJsonIsLabelledAndInRange) {
   EXPECT_GE(double(j["map"]["brier"]), 0.0);
   EXPECT_LE(double(j["map"]["brier"]), 2.0);
   for (const char* row : {"map", "input"}) {
-    for (const char* output : {"u", "conflict", "1-max_p", "dissonance"}) {
+    for (const char* output : {"u", "conflict", "1-max_p", "dissonance",
+                               "error_probability"}) {
       EXPECT_TRUE(j[row]["error_detection"].contains(output)) << row << " " << output;
     }
     EXPECT_EQ(j[row]["queries"], j["map"]["queries"]) << "the same queries for every row";
