@@ -113,6 +113,8 @@ def read_tf(reader) -> TfBuffer:
     """Every /tf and /tf_static transform of the bag."""
     tf = TfBuffer()
     conns = [c for c in reader.connections if c.msgtype == TFMESSAGE]
+    if not conns:  # messages(connections=[]) would read every connection
+        return tf
     for conn, _, raw in reader.messages(connections=conns):
         tf.add_message(reader.deserialize(raw, conn.msgtype), static=conn.topic == "/tf_static")
     return tf
@@ -123,6 +125,8 @@ def read_evidence_source(reader) -> Optional[str]:
     conns = [c for c in reader.connections
              if c.topic == "/evidence_source" and c.msgtype == "std_msgs/msg/String"]
     text = None
+    if not conns:  # messages(connections=[]) would read every connection
+        return text
     for conn, _, raw in reader.messages(connections=conns):
         text = reader.deserialize(raw, conn.msgtype).data
     return text
@@ -130,6 +134,37 @@ def read_evidence_source(reader) -> Optional[str]:
 
 def cloud_topics(reader) -> Dict[str, int]:
     return {c.topic: c.msgcount for c in reader.connections if c.msgtype == POINTCLOUD2}
+
+
+def first_cloud_frame(reader, conns) -> Optional[str]:
+    """header.frame_id of the topic's first cloud (None for a topic without messages)."""
+    for conn, _, raw in reader.messages(connections=conns):
+        return reader.deserialize(raw, conn.msgtype).header.frame_id
+    return None
+
+
+def frame_problem(tf: TfBuffer, map_frame: str, cloud_frame: str) -> str:
+    """Why the bag's TF can place no cloud of `cloud_frame` in `map_frame` ("" when it may).
+
+    Checked once before mapping, so that a bag recorded with other frame names, or without TF,
+    stops with the frame to fix instead of dropping every cloud one by one.
+    """
+    map_frame, cloud_frame = map_frame.lstrip("/"), cloud_frame.lstrip("/")
+    if map_frame == cloud_frame:  # the clouds are in the map frame: no TF needed (as tf2)
+        return ""
+    frames = tf.frames
+    if not frames:
+        return (f"the bag has no TF (no tf2_msgs/TFMessage on /tf or /tf_static), so the clouds' "
+                f"frame '{cloud_frame}' cannot be placed in the map frame '{map_frame}': record "
+                f"/tf and /tf_static with the bag, or map in the clouds' frame (--frame "
+                f"{cloud_frame})")
+    if cloud_frame not in frames:
+        return (f"the clouds' frame '{cloud_frame}' is not in the bag's TF (frames: "
+                f"{', '.join(frames)}): the clouds cannot be placed in '{map_frame}'")
+    if map_frame not in frames:
+        return (f"the map frame '{map_frame}' is not in the bag's TF (frames: "
+                f"{', '.join(frames)}): choose one of them with --frame")
+    return ""
 
 
 # --- mapping --------------------------------------------------------------------------------
@@ -182,7 +217,7 @@ def map_bag(bag, classes, options: MapOptions = MapOptions(), model: Optional[Ca
             if len(topics) != 1:
                 raise ValueError(f"{path}: {len(topics)} PointCloud2 topics "
                                  f"({', '.join(f'{t} ({n})' for t, n in topics.items()) or 'none'}"
-                                 "): choose one with --topic")
+                                 "): which one should be mapped? Choose it with --topic")
             topic = next(iter(topics))
         if topic not in topics:
             raise ValueError(f"{path}: no PointCloud2 topic '{topic}' (PointCloud2 topics: "
@@ -191,10 +226,14 @@ def map_bag(bag, classes, options: MapOptions = MapOptions(), model: Optional[Ca
         tf = read_tf(reader)
         seconds["tf"] += time.monotonic() - t0
         declared = read_evidence_source(reader)
+        conns = [c for c in reader.connections if c.topic == topic]
+        frame0 = first_cloud_frame(reader, conns)
+        problem = frame_problem(tf, options.frame, frame0) if frame0 is not None else ""
+        if problem:
+            raise ValueError(f"{path}: {problem}")
         total = topics[topic] if options.max_clouds is None else min(topics[topic],
                                                                     options.max_clouds)
         bar = _Progress(total, progress)
-        conns = [c for c in reader.connections if c.topic == topic]
         index = -1
         t0 = time.monotonic()
         for conn, _, raw in reader.messages(connections=conns):

@@ -175,6 +175,8 @@ class TfBuffer:
     def lookup(self, target: str, source: str, stamp_ns: int) -> np.ndarray:
         """4 x 4 T_target_source at the stamp (maps points in `source` to `target`)."""
         target, source = target.lstrip("/"), source.lstrip("/")
+        if target == source:  # as tf2: a frame is itself at every time, known or not
+            return np.eye(4)
         known = self.frames
         for frame in (target, source):
             if frame not in known:

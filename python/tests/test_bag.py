@@ -163,5 +163,7 @@ def test_a_users_model_file_is_called_with_the_points_and_fields(tmp_path, bags,
 def test_a_missing_topic_is_refused_naming_the_cloud_topics(bags, kitti_classes):
     with pytest.raises(ValueError, match="no PointCloud2 topic '/nope'.*/velodyne_points"):
         bag.map_bag(bags["ros1"][0], kitti_classes, bag.MapOptions(topic="/nope"))
-    with pytest.raises(ValueError, match="2 PointCloud2 topics.*choose one with --topic"):
+    with pytest.raises(ValueError,
+                       match=r"2 PointCloud2 topics.*which one should be mapped\? "
+                             r"Choose it with --topic"):
         bag.map_bag(bags["ros1"][0], kitti_classes, bag.MapOptions())
