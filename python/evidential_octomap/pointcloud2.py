@@ -319,3 +319,28 @@ def pack(columns: Dict[str, np.ndarray]) -> tuple:
         count = 1 if np.asarray(a).ndim == 1 else np.asarray(a).shape[1]
         fields.append((name, dtype.fields[name][1], FLOAT32, count))
     return fields, dtype.itemsize, data.view(np.uint8).reshape(-1)
+
+
+_DATATYPES = {np.dtype("<f4"): FLOAT32, np.dtype("<f8"): FLOAT64, np.dtype("<i4"): INT32,
+              np.dtype("<u4"): UINT32, np.dtype("<i2"): INT16, np.dtype("<u2"): UINT16,
+              np.dtype("i1"): INT8, np.dtype("u1"): UINT8}
+
+
+def pack_typed(columns: Dict[str, np.ndarray]) -> tuple:
+    """As :func:`pack`, for columns of any PointField type (float32, int32, uint32, ...), each
+    kept in its own dtype (little-endian)."""
+    descr = []
+    for name, a in columns.items():
+        a = np.asarray(a)
+        dt = a.dtype.newbyteorder("<") if a.dtype.itemsize > 1 else a.dtype
+        if dt not in _DATATYPES:
+            raise ValueError(f"column '{name}' has dtype {a.dtype}, which PointField lacks")
+        descr.append((name, dt, () if a.ndim == 1 else (a.shape[1],)))
+    dtype = np.dtype(descr)
+    n = len(next(iter(columns.values())))
+    data = np.empty(n, dtype=dtype)
+    fields = []
+    for (name, dt, shape) in descr:
+        data[name] = columns[name]
+        fields.append((name, dtype.fields[name][1], _DATATYPES[dt], shape[0] if shape else 1))
+    return fields, dtype.itemsize, data.view(np.uint8).reshape(-1)

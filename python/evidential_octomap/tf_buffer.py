@@ -102,6 +102,13 @@ class _Edge:
         self.translations.insert(i, t)
         self.rotations.insert(i, q)
 
+    def forget_before(self, stamp: int):
+        """Drops samples older than `stamp`, keeping the one just before it (to interpolate)."""
+        if self.static:
+            return
+        i = max(bisect.bisect_left(self.stamps, stamp) - 1, 0)
+        del self.stamps[:i], self.translations[:i], self.rotations[:i]
+
     def at(self, stamp: int) -> np.ndarray:
         """T_parent_child at the stamp; raises _OutOfRange when outside the samples."""
         if self.static:
@@ -146,6 +153,11 @@ class TfBuffer:
             self.add(t.header.frame_id, t.child_frame_id, stamp, (tr.x, tr.y, tr.z),
                      (q.x, q.y, q.z, q.w), static)
         return len(msg.transforms)
+
+    def forget_before(self, stamp_ns: int):
+        """Drops /tf samples older than the stamp (a live buffer's cache time, as tf2's)."""
+        for edge in self._edges.values():
+            edge.forget_before(int(stamp_ns))
 
     @property
     def frames(self) -> List[str]:

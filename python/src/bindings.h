@@ -79,6 +79,7 @@ void bindTree(nb::module_& m);
 void bindDataset(nb::module_& m);
 void bindMetrics(nb::module_& m);
 void bindConversions(nb::module_& m);
+void bindSettings(nb::module_& m);
 #ifdef EVIDENTIAL_OCTOMAP_PYTHON_RENDER
 void bindRender(nb::module_& m);
 #endif

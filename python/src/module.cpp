@@ -48,6 +48,7 @@ NB_MODULE(_core, m) {
   bindDataset(m);
   bindMetrics(m);
   bindConversions(m);
+  bindSettings(m);
 #ifdef EVIDENTIAL_OCTOMAP_PYTHON_RENDER
   bindRender(m);
 #endif

@@ -1,0 +1,391 @@
+"""The ROS 2 mapping node: converts messages and wires them to the core and to the ROS-free
+modules beside it (field rules: pointcloud2.py; TF: tf_wait.py; parameters and their checks:
+parameters.py; views: views.py, projection.py; status: status.py). The insert runs on its own
+thread behind a latest-only queue, as the ROS 1 node's, so the executor keeps taking clouds, TF,
+parameters and service calls while a scan is inserted."""
+import os
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .. import _core, bundled_class_table, pointcloud2
+from ..models import load_callable
+from . import parameters, projection, views
+from .latest_queue import LatestQueue
+from .status import MALFORMED, NO_SEMANTICS, NO_TRANSFORM, QUEUE_FULL, REFUSED, Status
+from .tf_wait import TfError, WaitingTf
+
+try:
+    import rclpy
+    from geometry_msgs.msg import Point
+    from nav_msgs.msg import OccupancyGrid
+    from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
+    from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
+                           qos_profile_sensor_data)
+    from sensor_msgs.msg import PointCloud2, PointField
+    from std_msgs.msg import ColorRGBA, String
+    from std_srvs.srv import Trigger
+    from visualization_msgs.msg import Marker, MarkerArray
+except ImportError as e:  # pragma: no cover - said once, plainly
+    raise SystemExit(f"evidential_octomap.ros2 needs the ROS 2 wheels ({e}): pip install "
+                     "\".[ros2]\"") from None
+try:
+    from tf2_msgs.msg import TFMessage
+except ImportError:  # pragma: no cover
+    raise SystemExit("evidential_octomap.ros2 needs tf2_msgs, which no wheel provides: pip "
+                     "install ./python/ros2_interfaces (it generates it from its .msg)") from None
+
+NODE_NAME = "evidential_mapping_node"
+# Latched, as the ROS 1 node's map topics: a late subscriber gets the last message.
+LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+TF_STATIC_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                           durability=DurabilityPolicy.TRANSIENT_LOCAL)
+MARKER_TOPICS = {"class": "occupied_cells_vis_array", "uncertainty": "uncertainty_cells_vis_array",
+                 "conflict": "conflict_cells_vis_array"}
+
+
+def stamp_ns(stamp) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def cloud_message(header, columns) -> "PointCloud2":
+    fields, step, data = pointcloud2.pack_typed(columns)
+    n = len(next(iter(columns.values())))
+    msg = PointCloud2(header=header, height=1, width=n, is_bigendian=False, point_step=step,
+                      row_step=step * n, is_dense=True)
+    msg.fields = [PointField(name=a, offset=o, datatype=d, count=c) for a, o, d, c in fields]
+    msg.data = data.tobytes()
+    return msg
+
+
+class MappingNode(Node):
+    def __init__(self, **kwargs):
+        super().__init__(NODE_NAME, **kwargs)
+        self.params = parameters.all_parameters()
+        for p in self.params:
+            constraints = ("one of " + ", ".join(p.choices) if p.choices else
+                           p.check[1] if p.check else p.range_text)
+            self.declare_parameter(p.name, p.default, ParameterDescriptor(
+                description=p.description, read_only=p.read_only,
+                additional_constraints=constraints))
+        self.values = {p.name: self.get_parameter(p.name).value for p in self.params}
+        reason = parameters.problem(self.values, self.params)
+        if reason:
+            raise ValueError(f"parameter refused: {reason}")
+        self.status = Status()
+        self.lock = threading.Lock()  # the tree: inserts, views, services, autosave
+        self._load_map()
+        self.tf = WaitingTf(self.values["tf_cache_time"])
+        self.model = load_callable(self.values["model"]) if self.values.get("model") else None
+        self.queue = LatestQueue(self.values["insert_queue_size"])
+        self.changed = threading.Event()
+        self.force_views = threading.Event()
+        self.unsaved = False
+        self.running = True
+
+        services = MutuallyExclusiveCallbackGroup()
+        cloud_qos = (qos_profile_sensor_data if self.values["cloud_in_qos"] == "sensor_data"
+                     else QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE))
+        self.create_subscription(PointCloud2, "cloud_in", self._on_cloud, cloud_qos)
+        self.create_subscription(TFMessage, "/tf", lambda m: self.tf.add_message(m), TF_QOS)
+        self.create_subscription(TFMessage, "/tf_static",
+                                 lambda m: self.tf.add_message(m, static=True), TF_STATIC_QOS)
+        self.create_subscription(PointCloud2, "query_in", self._on_query, 10,
+                                 callback_group=services)
+        self.markers = {v: self.create_publisher(MarkerArray, t, LATCHED)
+                        for v, t in MARKER_TOPICS.items()}
+        self.marker_subscribers = {v: 0 for v in MARKER_TOPICS}
+        self.cloud_pub = self.create_publisher(PointCloud2, "semantic_cloud", LATCHED)
+        self.grid_pub = self.create_publisher(OccupancyGrid, "projected_map", LATCHED)
+        self.query_pub = self.create_publisher(PointCloud2, "query_out", 10)
+        self.status_pub = self.create_publisher(String, "~/status", LATCHED)
+        self.create_service(Trigger, "~/save_map", self._on_save, callback_group=services)
+        self.create_service(Trigger, "~/reset", self._on_reset, callback_group=services)
+        self.create_timer(1.0, self._publish_status, callback_group=services)
+        if self.values["autosave_period"] > 0:
+            self.create_timer(self.values["autosave_period"], self._autosave,
+                              callback_group=services)
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.threads = [threading.Thread(target=self._insert_loop, name="insert", daemon=True),
+                        threading.Thread(target=self._view_loop, name="views", daemon=True)]
+        for t in self.threads:
+            t.start()
+        self.force_views.set()
+        self.get_logger().info(
+            f"mapping {self.classes.num_classes} classes into '{self.values['frame_id']}' at "
+            f"{self.tree.resolution} m, rule {self.tree.rule}; cloud_in -> "
+            f"{self.resolve_topic_name('cloud_in')}")
+
+    # --- start-up -------------------------------------------------------------------------
+    def _load_map(self):
+        v = self.values
+        self.classes = (_core.ClassTable.load(v["classes"]) if v["classes"]
+                        else bundled_class_table("semantickitti"))
+        if v["num_classes"] and v["num_classes"] != self.classes.num_classes:
+            raise ValueError(f"num_classes = {v['num_classes']} but the class table has "
+                             f"{self.classes.num_classes} classes")
+        config = parameters.semantic_config(v, self.params)
+        self.autosave_path = Path(v["autosave_path"] or Path(os.environ.get(
+            "ROS_HOME", Path.home() / ".ros")) / "evidential_octomap" /
+            f"{self.get_name()}.autosave.ot")
+        start = v["map_file"]
+        if v["autosave_period"] > 0 and v["resume_from_autosave"] and self.autosave_path.is_file():
+            start = str(self.autosave_path)
+            age = time.time() - self.autosave_path.stat().st_mtime
+            self.get_logger().info(f"resuming from the autosave {start} ({age:.0f} s old)")
+        if start:
+            self.tree = _core.EvidentialOcTree.load(start)
+            if self.tree.num_classes != self.classes.num_classes:
+                raise ValueError(f"{start} has {self.tree.num_classes} classes, the class table "
+                                 f"{self.classes.num_classes}")
+            self.tree.set_config(config)
+        else:
+            self.tree = _core.EvidentialOcTree(v["resolution"], self.classes, config)
+        self._set_sensor_model(v)
+        if v["calibration_file"]:
+            self.tree.apply_calibration(_core.read_calibration(v["calibration_file"]))
+
+    def _set_sensor_model(self, v):
+        self.tree.prob_hit = v["sensor_model.hit"]
+        self.tree.prob_miss = v["sensor_model.miss"]
+        self.tree.clamping_thres_min = v["sensor_model.min"]
+        self.tree.clamping_thres_max = v["sensor_model.max"]
+
+    # --- parameters ---------------------------------------------------------------------
+    def _on_set_parameters(self, changed):
+        values = dict(self.values)
+        for p in changed:
+            values[p.name] = p.value
+        reason = parameters.problem(values, self.params)
+        if not reason:
+            try:
+                with self.lock:
+                    self.tree.set_config(parameters.semantic_config(values, self.params))
+                    self._set_sensor_model(values)
+            except (ValueError, RuntimeError) as e:
+                reason = str(e)
+        names = ", ".join(f"{p.name}={p.value}" for p in changed)
+        if reason:
+            self.status.event(f"refused {names}: {reason}")
+            self.get_logger().warning(f"parameter refused ({names}): {reason}")
+            return SetParametersResult(successful=False, reason=reason)
+        self.values = values
+        self.queue.resize(values["insert_queue_size"])
+        self.status.event(f"set {names}")
+        return SetParametersResult(successful=True)
+
+    # --- input ----------------------------------------------------------------------------
+    def _on_cloud(self, msg):
+        self.status.received_cloud()
+        pushed_out = self.queue.put(msg)
+        if pushed_out is not None:
+            self._drop(QUEUE_FULL, pushed_out, "the insert queue was full (insert_queue_size "
+                       f"{self.values['insert_queue_size']}): a newer cloud replaced it")
+
+    def _drop(self, kind, msg, reason):
+        frame = msg.header.frame_id
+        text = f"cloud dropped (frame {frame}, {stamp_ns(msg.header.stamp) / 1e9:.3f} s): {reason}"
+        self.status.drop(kind, text, stamp_ns(msg.header.stamp), frame)
+        self.get_logger().warning(text, throttle_duration_sec=2.0)
+
+    def _insert_loop(self):
+        while self.running:
+            msg = self.queue.get(timeout=0.2)
+            if msg is not None:
+                self._insert(msg)
+
+    def _insert(self, msg):
+        v = self.values
+        try:
+            cloud = pointcloud2.decode(msg, self.classes.num_classes, v["input_type"],
+                                       v["label_evidence"], v["logit_transform"],
+                                       v["probability_evidence"],
+                                       self.classes if v["label_is_raw"] else None)
+        except pointcloud2.CloudError as e:
+            return self._drop(MALFORMED, msg, f"{e}; map unchanged")
+        evidence = cloud.evidence
+        if evidence is None:
+            if self.model is None:
+                return self._drop(NO_SEMANTICS, msg, "no semantic field (evidence, alpha, "
+                                  "logits, probabilities or label; fields: "
+                                  f"{', '.join(f.name for f in msg.fields)}) and no `model`")
+            try:
+                evidence = np.asarray(self.model(cloud.points, cloud.fields), dtype=np.float32)
+            except Exception as e:  # a user's model: report, keep mapping
+                return self._drop(REFUSED, msg, f"model failed: {type(e).__name__}: {e}")
+        try:
+            pose = self.tf.lookup(v["frame_id"], msg.header.frame_id, stamp_ns(msg.header.stamp),
+                                  v["transform_timeout"])
+        except TfError as e:
+            return self._drop(NO_TRANSFORM, msg, str(e))
+        t0 = time.monotonic()
+        try:
+            with self.lock:
+                self.tree.insert_scan(cloud.points, evidence, pose=pose)
+                self.status.set_map(self.tree)
+        except ValueError as e:
+            return self._drop(REFUSED, msg, f"evidence refused: {e}; map unchanged")
+        self.status.inserted_cloud(len(cloud.points), time.monotonic() - t0)
+        self.unsaved = True
+        self.changed.set()
+
+    def _on_query(self, msg):
+        """query_in (x, y, z) -> query_out: per point label, error_probability, uncertainty (u),
+        conflict, occupied, known and belief (count C), in the query's frame and order."""
+        f = pointcloud2.all_fields(msg)
+        points = np.column_stack([f["x"], f["y"], f["z"]]).astype(np.float32)
+        frame = msg.header.frame_id or self.values["frame_id"]
+        try:
+            T = self.tf.lookup(self.values["frame_id"], frame, stamp_ns(msg.header.stamp),
+                               self.values["transform_timeout"])
+        except TfError as e:
+            self.get_logger().error(f"query refused: {e}")
+            return
+        world = (points @ T[:3, :3].T + T[:3, 3]).astype(np.float32)
+        with self.lock:
+            r = self.tree.query(world)
+        self.query_pub.publish(cloud_message(msg.header, {
+            "x": points[:, 0], "y": points[:, 1], "z": points[:, 2], "label": r.labels,
+            "error_probability": r.error_probability, "uncertainty": r.uncertainty,
+            "conflict": r.conflict, "occupied": r.occupied.astype(np.uint8),
+            "known": r.known.astype(np.uint8), "belief": np.asarray(r.belief, np.float32)}))
+
+    # --- outputs --------------------------------------------------------------------------
+    def _view_loop(self):
+        last = 0.0
+        while self.running:
+            rate = self.values["publish_rate"]
+            period = 1.0 / rate if rate > 0 else 0.0
+            new_subscriber = any(self.markers[v].get_subscription_count() > n
+                                 for v, n in self.marker_subscribers.items())
+            due = self.changed.is_set() and time.monotonic() - last >= period
+            if due or new_subscriber or self.force_views.is_set():
+                self.changed.clear()
+                self.force_views.clear()
+                last = time.monotonic()
+                try:
+                    self._publish_views()
+                except Exception as e:  # a view must never stop the mapper
+                    self.get_logger().error(f"views not published: {type(e).__name__}: {e}")
+            time.sleep(0.05)
+
+    def _publish_views(self):
+        v = self.values
+        with self.lock:
+            leaves = views.occupied_leaves(self.tree, v["occupancy_min_z"], v["occupancy_max_z"])
+            grid = projection.project(self.tree, v["occupancy_min_z"], v["occupancy_max_z"])
+        header = self._header()
+        self.cloud_pub.publish(cloud_message(header, views.cloud_columns(leaves, self.classes)))
+        self.grid_pub.publish(self._grid_message(header, grid))
+        points = None
+        for view, pub in self.markers.items():
+            n = pub.get_subscription_count()
+            self.marker_subscribers[view] = n
+            if n == 0:  # markers cost ~1 s per 300k voxels in Python: only for someone
+                continue
+            if points is None:
+                points = [Point(x=x, y=y, z=z) for x, y, z in leaves.centers.tolist()]
+            pub.publish(self._markers(header, leaves, view, points))
+
+    def _header(self):
+        from std_msgs.msg import Header
+        return Header(stamp=self.get_clock().now().to_msg(), frame_id=self.values["frame_id"])
+
+    def _markers(self, header, leaves, view, points):
+        palette, index = views.colours(leaves, self.classes, view)
+        colours = [ColorRGBA(r=r, g=g, b=b, a=a) for r, g, b, a in palette.tolist()]
+        out = MarkerArray(markers=[Marker(header=header, ns=view, action=Marker.DELETEALL)])
+        for i, (size, members) in enumerate(views.by_size(leaves)):
+            m = Marker(header=header, ns=view, id=i, type=Marker.CUBE_LIST, action=Marker.ADD)
+            m.pose.orientation.w = 1.0
+            m.scale.x = m.scale.y = m.scale.z = size
+            m.points = [points[j] for j in members.tolist()]
+            m.colors = [colours[j] for j in index[members].tolist()]
+            out.markers.append(m)
+        return out
+
+    def _grid_message(self, header, grid):
+        msg = OccupancyGrid(header=header)
+        msg.info.resolution = float(grid.resolution)
+        msg.info.height, msg.info.width = (int(n) for n in grid.data.shape)
+        msg.info.origin.position.x, msg.info.origin.position.y = grid.origin
+        msg.info.origin.orientation.w = 1.0
+        msg.data = grid.data.reshape(-1).tobytes()
+        return msg
+
+    def _publish_status(self):
+        self.status_pub.publish(String(data=self.status.to_json(len(self.queue))))
+
+    # --- services -------------------------------------------------------------------------
+    def _on_save(self, request, response):
+        ot = Path(self.values["save_path"]).expanduser().resolve()
+        bt = ot.with_suffix(".bt")
+        try:
+            ot.parent.mkdir(parents=True, exist_ok=True)
+            with self.lock:
+                self.tree.save(str(ot))
+                self.tree.save_occupancy(str(bt))
+                leaves = self.tree.num_leaves
+            response.success, response.message = True, f"wrote {ot} and {bt} ({leaves} leaves)"
+        except (RuntimeError, OSError) as e:
+            response.success, response.message = False, f"map not saved: {e}"
+        self.status.event(response.message)
+        return response
+
+    def _on_reset(self, request, response):
+        with self.lock:
+            self.tree.clear()
+            self.status.set_map(self.tree)
+        self.force_views.set()
+        response.success, response.message = True, "map reset: empty"
+        self.status.event(response.message)
+        return response
+
+    def _autosave(self):
+        if not self.unsaved:
+            return
+        try:
+            self.autosave_path.parent.mkdir(parents=True, exist_ok=True)
+            with self.lock:
+                self.unsaved = False
+                self.tree.save(str(self.autosave_path))
+            self.status.event(f"autosaved {self.autosave_path}")
+        except (RuntimeError, OSError) as e:
+            self.status.event(f"autosave failed: {e}")
+            self.get_logger().error(f"autosave failed: {e}")
+
+    def shutdown(self):
+        self.running = False
+        self.queue.close()
+        for t in self.threads:
+            t.join(timeout=5)
+
+
+def main(argv=None) -> int:
+    """Console script and ``python -m evidential_octomap.ros2``; takes --ros-args."""
+    rclpy.init(args=sys.argv if argv is None else argv)
+    try:
+        node = MappingNode()
+    except (ValueError, RuntimeError, IndexError) as e:
+        print(f"{NODE_NAME}: {e}", file=sys.stderr)
+        rclpy.try_shutdown()
+        return 1
+    executor = MultiThreadedExecutor(num_threads=2)
+    executor.add_node(node)
+    try:
+        executor.spin()
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

@@ -1,0 +1,73 @@
+"""What the node has done and why it dropped what it dropped, as one JSON document (the status
+topic): counts by reason, the last drop with its reason, insert times and the map's size."""
+import json
+import statistics
+import threading
+import time
+from collections import Counter, deque
+
+# Why a cloud is not in the map, as counted (the reason text of each drop says more).
+MALFORMED, NO_SEMANTICS, NO_TRANSFORM, QUEUE_FULL, REFUSED = (
+    "malformed", "no_semantic_field", "no_transform", "queue_full", "evidence_refused")
+
+
+class Status:
+    def __init__(self):
+        self._lock = threading.Lock()
+        self.started = time.monotonic()
+        self.received = 0
+        self.inserted = 0
+        self.points = 0
+        self.dropped = Counter()
+        self.last_drop = None
+        self.insert_ms = deque(maxlen=100)
+        self.map = {}
+        self.events = deque(maxlen=10)  # parameter changes, saves, resets, with their results
+
+    def received_cloud(self):
+        with self._lock:
+            self.received += 1
+
+    def drop(self, kind: str, reason: str, stamp_ns: int = 0, frame: str = ""):
+        with self._lock:
+            self.dropped[kind] += 1
+            self.last_drop = {"kind": kind, "reason": reason, "stamp_ns": stamp_ns,
+                              "frame": frame}
+
+    def inserted_cloud(self, points: int, seconds: float):
+        with self._lock:
+            self.inserted += 1
+            self.points += points
+            self.insert_ms.append(1000.0 * seconds)
+
+    def event(self, text: str):
+        with self._lock:
+            self.events.append(text)
+
+    def set_map(self, tree):
+        info = {"leaves": tree.num_leaves, "semantic_nodes": tree.num_semantic_nodes,
+                "memory_bytes": tree.memory_usage, "rule": tree.rule,
+                "resolution": tree.resolution}
+        with self._lock:
+            self.map = info
+
+    def as_dict(self, queue_length: int = 0) -> dict:
+        with self._lock:
+            times = list(self.insert_ms)
+            return {
+                "uptime_s": round(time.monotonic() - self.started, 3),
+                "clouds_received": self.received,
+                "clouds_inserted": self.inserted,
+                "points_inserted": self.points,
+                "clouds_dropped": sum(self.dropped.values()),
+                "dropped_by_reason": dict(self.dropped),
+                "last_drop": self.last_drop,
+                "insert_queue": queue_length,
+                "insert_ms_median": round(statistics.median(times), 1) if times else None,
+                "insert_ms_last": round(times[-1], 1) if times else None,
+                "map": self.map,
+                "events": list(self.events),
+            }
+
+    def to_json(self, queue_length: int = 0) -> str:
+        return json.dumps(self.as_dict(queue_length))
