@@ -162,6 +162,7 @@ def test_the_map_equals_the_python_api_and_the_cli_maps_of_the_same_scans(saved,
         maps["cli"] = eo.load(tmp_path / "map.ot")
     for name, tree in maps.items():
         agree = float(np.mean(tree.query(points).labels == labels))
+        print(f"labels equal to the {name} map at {agree:.2%} of {len(points)} points")
         assert agree >= 0.999, (name, agree)
 
 
@@ -179,6 +180,17 @@ def test_a_late_subscriber_gets_the_latched_views(saved, client):
     assert cubes == len(occupied.sizes)
     names = {name for name, _ in client.get_topic_names_and_types()}
     assert {"/" + t for t in MARKER_TOPICS.values()} <= names
+
+
+def test_every_topic_of_the_rviz2_config_is_one_the_node_has(replayed, client):
+    config = (REPO / "rviz_cfg" / "ros2_mapping.rviz").read_text().splitlines()
+    named = {line.split(":", 1)[1].strip() for i, line in enumerate(config)
+             if line.strip().startswith("Value: /")}
+    assert len(named) == 5
+    spin_until(client, lambda: False, 0.5)
+    published = {name for name, _ in client.get_publisher_names_and_types_by_node(
+        NODE.lstrip("/"), "/")}
+    assert named <= published, named - published
 
 
 def test_a_query_answers_the_labels_of_the_map(saved, client):

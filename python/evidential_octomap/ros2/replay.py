@@ -74,7 +74,8 @@ def main(argv=None) -> int:
     options = WriteOptions()
     rclpy.init(args=sys.argv if argv is None else argv)
     node = rclpy.create_node("evidential_octomap_replay")
-    pub = node.create_publisher(PointCloud2, args.topic, 5)
+    # reliable, keeping 10: a reader slower than the rate still gets each cloud of a burst
+    pub = node.create_publisher(PointCloud2, args.topic, 10)
     tf_pub = node.create_publisher(TFMessage, "/tf", 100)
     static_pub = node.create_publisher(TFMessage, "/tf_static", TF_STATIC_QOS)
     taken = [0]
