@@ -75,6 +75,31 @@ TEST(ErrorModel, TheFitRecoversAKnownLawAndBeatsEverySingleFeatureOnHeldOutFolds
   EXPECT_NEAR(predicted / observed, 1.0, 0.05);
 }
 
+// A confident network fuses hundreds of units of log-evidence into one class: e^(L) of the others
+// underflows against it, and a feature must still be a finite number (a -inf poisons the fit).
+TEST(ErrorModel, FeaturesOfExtremeEvidenceAreFinite) {
+  const int C = 3;
+  for (const std::array<float, 3>& payload :
+       {std::array<float, 3>{1000.f, 0.f, 0.f}, {0.f, 0.f, 0.f}, {800.f, 799.f, 0.f}}) {
+    VoxelOpinion o;
+    o.label = 0;
+    o.belief = {0.6f, 0.1f, 0.0f};
+    o.uncertainty = 0.3f;
+    const ErrorModel::Features x = ErrorModel::features(payload.data(), o, C);
+    for (int f = 0; f < ErrorModel::kNumFeatures; ++f) {
+      EXPECT_TRUE(std::isfinite(x[f])) << ErrorModel::featureNames()[f] << " of " << payload[0];
+    }
+  }
+  // The label's Dirichlet variance p (1 - p) / (S + 1), alpha = e^L, written out.
+  const std::array<float, 3> even{2.f, 1.f, 1.f};
+  VoxelOpinion o;
+  o.label = 0;
+  o.belief = {0.5f, 0.2f, 0.2f};
+  o.uncertainty = 0.1f;
+  const double s = std::exp(2.0) + 2.0 * std::exp(1.0), p = std::exp(2.0) / s;
+  EXPECT_NEAR(ErrorModel::features(even.data(), o, C)[4], std::log(p * (1 - p) / (s + 1)), 1e-9);
+}
+
 TEST(ErrorModel, RowsThatAreAllRightCannotBeFitted) {
   std::vector<ErrorRow> rows = knownLawRows(500, 3);
   for (ErrorRow& r : rows) r.wrong = false;

@@ -18,21 +18,28 @@ double logit(double p) {
 
 double sigmoid(double z) { return z >= 0 ? 1.0 / (1.0 + std::exp(-z)) : std::exp(z) / (1.0 + std::exp(z)); }
 
-// ln of the label's Dirichlet variance p (1 - p) / (S + 1) with alpha^c = e^(L^c), in logs
-// (L reaches 1024).
+// ln of sum_c e^(L^c) over the classes c with `include(c)`, without overflow or underflow
+// (L reaches 1024); -inf for none.
+template <class Include>
+double logSumExp(const float* payload, int num_classes, Include include) {
+  double top = -INFINITY;
+  for (int c = 0; c < num_classes; ++c)
+    if (include(c)) top = std::max(top, double(payload[c]));
+  if (top == -INFINITY) return top;
+  double sum = 0.0;
+  for (int c = 0; c < num_classes; ++c)
+    if (include(c)) sum += std::exp(double(payload[c]) - top);
+  return top + std::log(sum);
+}
+
+// ln of the label's Dirichlet variance p (1 - p) / (S + 1) with alpha^c = e^(L^c), in logs.
+// Bounded below so that a voxel whose other classes hold no evidence at all stays finite.
 double logDirichletVariance(const float* payload, int label, int num_classes) {
-  double top = payload[0];
-  for (int c = 1; c < num_classes; ++c) top = std::max(top, double(payload[c]));
-  double sum = 0.0, rest = 0.0;  // of e^(L - top)
-  for (int c = 0; c < num_classes; ++c) {
-    const double a = std::exp(double(payload[c]) - top);
-    sum += a;
-    if (c != label) rest += a;
-  }
-  const double log_s = top + std::log(sum);
-  const double log_p = double(payload[label]) - log_s, log_rest = std::log(rest) + top - log_s;
+  const double log_s = logSumExp(payload, num_classes, [](int) { return true; });
+  const double log_rest = logSumExp(payload, num_classes, [label](int c) { return c != label; });
+  const double log_p = double(payload[label]) - log_s;
   const double log_s1 = log_s > 30.0 ? log_s : std::log1p(std::exp(log_s));
-  return log_p + log_rest - log_s1;
+  return std::max(log_p + log_rest - log_s - log_s1, -4096.0);
 }
 
 }  // namespace

@@ -20,7 +20,11 @@ class ErrorModelFit {
     for (size_t i = 0; i < n_; ++i)
       for (size_t j = 0; j < d_; ++j)
         x_[i * d_ + j] = ErrorModel::value(terms_[j], rows[i].x, rows[i].label);
-    for (size_t j = 1; j < d_; ++j) standardise(j);  // term 0 is the intercept
+    // Features and hinges are standardised so that one penalty fits all; label offsets stay
+    // 0/1, so that the penalty shrinks a rare label's offset (standardised, a label seen on a
+    // few voxels would barely be penalised and take an extreme weight from them).
+    for (size_t j = 1; j < d_; ++j)
+      if (terms_[j].kind != ErrorModel::Term::kLabel) standardise(j);
   }
 
   // Weights (standardised terms) minimising the log loss over the rows where `use` is true plus
@@ -31,14 +35,22 @@ class ErrorModelFit {
     for (size_t i = 0; i < n_; ++i)
       if (use[i]) wrong += rows_[i].wrong, count += 1.0;
     w[0] = std::log((wrong + 0.5) / (count - wrong + 0.5));
-    for (int iteration = 0; iteration < 30; ++iteration) {
+    double loss = objective(use, penalty, w);
+    for (int iteration = 0; iteration < 50; ++iteration) {
       const std::vector<double> step = newtonStep(use, penalty, w);
-      double largest = 0.0;
-      for (size_t j = 0; j < d_; ++j) {
-        w[j] -= step[j];
-        largest = std::max(largest, std::fabs(step[j]));
+      // Damped: a full Newton step can overshoot on separable hinges; halve until it descends.
+      std::vector<double> next(d_);
+      double next_loss = INFINITY, t = 1.0;
+      for (int halving = 0; halving < 30; ++halving, t *= 0.5) {
+        for (size_t j = 0; j < d_; ++j) next[j] = w[j] - t * step[j];
+        next_loss = objective(use, penalty, next);
+        if (next_loss <= loss) break;
       }
-      if (largest < 1e-7) break;
+      if (!(next_loss <= loss)) break;
+      const bool converged = loss - next_loss < 1e-10 * std::max(1.0, loss);
+      w = next;
+      loss = next_loss;
+      if (converged) break;
     }
     return w;
   }
@@ -71,6 +83,22 @@ class ErrorModelFit {
     const double sd = std::sqrt(squares / double(n_));
     scale_[j] = sd > 1e-12 ? sd : 1.0;  // a constant term: its weight stays at the penalty's 0
     for (size_t i = 0; i < n_; ++i) x_[i * d_ + j] = (x_[i * d_ + j] - mean_[j]) / scale_[j];
+  }
+
+  // The penalised log loss at w over the rows where `use` is true.
+  double objective(const std::vector<char>& use, double penalty,
+                   const std::vector<double>& w) const {
+    double loss = 0.0;
+    for (size_t i = 0; i < n_; ++i) {
+      if (!use[i]) continue;
+      double z = 0.0;
+      for (size_t j = 0; j < d_; ++j) z += w[j] * x_[i * d_ + j];
+      // log(1 + e^z) - y z, stable for either sign of z
+      loss += (z > 0 ? z + std::log1p(std::exp(-z)) : std::log1p(std::exp(z))) -
+              (rows_[i].wrong ? z : 0.0);
+    }
+    for (size_t j = 1; j < d_; ++j) loss += 0.5 * penalty * w[j] * w[j];
+    return loss;
   }
 
   // H^-1 g of the penalised log loss at w (Cholesky; H is positive definite for penalty > 0).
@@ -165,7 +193,7 @@ ErrorModelFitResult fitErrorModel(const std::vector<ErrorRow>& all_rows, int num
   const ErrorModelFit fit(rows, termsFor(rows, num_classes));
   ErrorModelFitResult result;
   double best_loss = INFINITY;
-  for (double per_row : {1e-5, 1e-4, 1e-3, 1e-2}) {
+  for (double per_row : {1e-5, 1e-4, 1e-3, 1e-2, 1e-1}) {
     const double penalty = per_row * double(rows.size());
     std::vector<double> out_of_fold(all_rows.size());
     for (int k = 0; k < folds; ++k) {

@@ -14,6 +14,7 @@
 //     single output's on the same queries.
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -33,6 +34,8 @@
 namespace evidential_octomap::tools {
 
 namespace {
+
+constexpr int kErrorModelFolds = 5;  // of the 10 m blocks
 
 struct CalibrateOptions {
   std::string data, classes, out = "calibration.yaml";
@@ -117,22 +120,29 @@ std::string differenceText(const BootstrapInterval& d) {
   return text.str();
 }
 
+// The 10 m block of a point, the same number in every map and query set (the fit's folds are
+// blocks, so that a place is never in the rows a model is fitted on and judged on).
+uint32_t blockOf(const octomap::point3d& p) {
+  const double side = BootstrapSettings().block_size;
+  const auto x = uint32_t(int32_t(std::floor(p.x() / side)));
+  const auto y = uint32_t(int32_t(std::floor(p.y() / side)));
+  return (x * 73856093u) ^ (y * 19349663u);
+}
+
 // The error model's rows: each labelled query's voxel features, whether its label is wrong and
-// its 10 m block (the fold).
+// its block.
 void addErrorRows(const EvidentialOcTree& tree, const std::vector<Query>& queries,
                   int ignore_class, std::vector<ErrorRow>* rows) {
-  size_t blocks = 0;
-  const std::vector<uint32_t> block = spatialBlocks(queries, BootstrapSettings().block_size, &blocks);
   const int C = tree.numClasses();
   float payload[EvidentialOcTree::kMaxClasses];
-  for (size_t i = 0; i < queries.size(); ++i) {
-    const Query& q = queries[i];
+  for (const Query& q : queries) {
     octomap::OcTreeKey key;
     if (q.gt < 0 || q.gt >= C || q.gt == ignore_class) continue;
     if (!safeCoordToKey(tree, q.point_W, &key) || !tree.answerPayload(key, payload)) continue;
     const VoxelOpinion o = tree.rule().readout(payload, C);
     if (o.label < 0) continue;
-    rows->push_back({ErrorModel::features(payload, o, C), o.label, o.label != q.gt, block[i]});
+    rows->push_back({ErrorModel::features(payload, o, C), o.label, o.label != q.gt,
+                     blockOf(q.point_W)});
   }
 }
 
@@ -150,21 +160,38 @@ struct ErrorModelReport {
   }
 };
 
+// AUROC within each held-out fold, averaged with the fold's rows as weights: each fold is scored
+// with the one model fitted without it, as a map is read with one model (pooled over folds, the
+// folds' models would be ranked against each other).
+double foldAuroc(const std::vector<ErrorRow>& rows, const std::function<double(size_t)>& score) {
+  double sum = 0.0, weight = 0.0;
+  for (int k = 0; k < kErrorModelFolds; ++k) {
+    std::vector<float> s;
+    std::vector<uint8_t> wrong;
+    for (size_t i = 0; i < rows.size(); ++i) {
+      if (int(rows[i].fold % kErrorModelFolds) != k) continue;
+      s.push_back(float(score(i)));
+      wrong.push_back(rows[i].wrong);
+    }
+    const double a = auroc(s, wrong);
+    if (!std::isfinite(a)) continue;  // a fold without wrong (or right) labels
+    sum += a * double(s.size());
+    weight += double(s.size());
+  }
+  return weight > 0.0 ? sum / weight : NAN;
+}
+
 ErrorModelReport reportOf(const std::vector<ErrorRow>& rows, const std::vector<double>& oof) {
   ErrorModelReport r;
-  std::vector<uint8_t> wrong(rows.size());
-  std::vector<float> score(rows.size());
-  for (size_t i = 0; i < rows.size(); ++i) wrong[i] = rows[i].wrong, r.wrong += rows[i].wrong;
   r.rows = rows.size();
-  for (size_t i = 0; i < rows.size(); ++i) score[i] = float(oof[i]);
-  r.model_auroc = auroc(score, wrong);
+  for (const ErrorRow& row : rows) r.wrong += row.wrong;
+  r.model_auroc = foldAuroc(rows, [&](size_t i) { return oof[i]; });
   // Each feature in the direction in which it flags errors (label_share: low is worse).
   for (int f = 0; f < ErrorModel::kNumFeatures; ++f) {
     const std::string name = ErrorModel::featureNames()[f];
     if (name == "evidence_mass") continue;  // a size, not an uncertainty
     const double sign = name == "label_share" ? -1.0 : 1.0;
-    for (size_t i = 0; i < rows.size(); ++i) score[i] = float(sign * rows[i].x[f]);
-    r.single.emplace_back(name, auroc(score, wrong));
+    r.single.emplace_back(name, foldAuroc(rows, [&](size_t i) { return sign * rows[i].x[f]; }));
   }
   return r;
 }
@@ -189,7 +216,7 @@ ErrorModelFitRun fitErrorModelOn(const std::vector<Scan>& scans,
     addErrorRows(*half.tree, buildQueries(scans, even, classes.ignore_class, nullptr, nullptr),
                  classes.ignore_class, &rows);
   }
-  const ErrorModelFitResult fit = fitErrorModel(rows, classes.numClasses());
+  const ErrorModelFitResult fit = fitErrorModel(rows, classes.numClasses(), kErrorModelFolds);
   return {std::make_shared<const ErrorModel>(fit.model), reportOf(rows, fit.out_of_fold)};
 }
 
