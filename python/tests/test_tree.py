@@ -263,7 +263,7 @@ def test_an_applied_error_model_is_the_maps_error_probability(tmp_path):
     tree = eo.EvidentialOcTree(0.2, ["road", "grass", "tree"])
     points = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0]], dtype=np.float32)
     evidence = np.array([[6.0, 1.0, 0.0], [0.5, 0.4, 0.3]], dtype=np.float32)
-    tree.insert_scan(points, evidence)
+    tree.insert_scan(points, evidence, origin=(0.0, 0.0, 0.0))
     tree.apply_calibration(eo.read_calibration(_calibration_file(tmp_path, tree.class_names)))
     assert tree.calibrated
     answer = tree.query(points)
