@@ -259,11 +259,13 @@ def test_at_10_hz_every_cloud_is_inserted_or_counted_as_dropped(saved, client, n
                s["clouds_inserted"] + s["clouds_dropped"] == s["clouds_received"], 60)
     received = s["clouds_received"] - before["clouds_received"]
     inserted = s["clouds_inserted"] - before["clouds_inserted"]
-    queue_full = (s["dropped_by_reason"].get("queue_full", 0)
-                  - before["dropped_by_reason"].get("queue_full", 0))
-    # What DDS delivered is accounted for cloud by cloud; what it did not (a reliable writer
-    # keeps the last 5) the node never saw.
+    dropped = {k: n - before["dropped_by_reason"].get(k, 0)
+               for k, n in s["dropped_by_reason"].items()
+               if n > before["dropped_by_reason"].get(k, 0)}
+    # What DDS delivered is accounted for cloud by cloud: inserted, or dropped with a reason
+    # (a full queue, most of them, or a transform that came too late on a loaded machine).
     assert sent == 10 and received <= sent
-    assert inserted + queue_full == received and inserted >= 1
-    print(f"10 Hz: {received} of {sent} clouds received, {inserted} inserted, {queue_full} "
-          f"dropped (queue full); median insert {s['insert_ms_median']} ms")
+    assert inserted + sum(dropped.values()) == received and inserted >= 1
+    assert set(dropped) <= {"queue_full", "no_transform"}, s["last_drop"]
+    print(f"10 Hz: {received} of {sent} clouds received, {inserted} inserted, dropped {dropped}; "
+          f"median insert {s['insert_ms_median']} ms")

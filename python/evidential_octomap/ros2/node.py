@@ -70,14 +70,20 @@ class MappingNode(Node):
     def __init__(self, **kwargs):
         super().__init__(NODE_NAME, **kwargs)
         self.params = parameters.all_parameters()
+        self.by_name = {p.name: p for p in self.params}
         for p in self.params:
             constraints = ("one of " + ", ".join(p.choices) if p.choices else
                            p.check[1] if p.check else p.range_text)
+            # floats typed dynamically, so that an integer (YAML `2`, `:=1`) is taken as 2.0
             self.declare_parameter(p.name, p.default, ParameterDescriptor(
                 description=p.description, read_only=p.read_only,
-                additional_constraints=constraints))
-        self.values = {p.name: self.get_parameter(p.name).value for p in self.params}
-        reason = parameters.problem(self.values, self.params)
+                additional_constraints=constraints,
+                dynamic_typing=isinstance(p.default, float)))
+        self.values, reason = {}, ""
+        for p in self.params:
+            self.values[p.name], why = parameters.coerce(p, self.get_parameter(p.name).value)
+            reason = reason or why
+        reason = reason or parameters.problem(self.values, self.params)
         if reason:
             raise ValueError(f"parameter refused: {reason}")
         self.status = Status()
@@ -91,13 +97,17 @@ class MappingNode(Node):
         self.unsaved = False
         self.running = True
 
-        services = MutuallyExclusiveCallbackGroup()
+        # clouds, TF and services each in their own group, so a burst of clouds never holds
+        # up the transforms they wait for, nor a service call
+        services, tf_group = MutuallyExclusiveCallbackGroup(), MutuallyExclusiveCallbackGroup()
         cloud_qos = (qos_profile_sensor_data if self.values["cloud_in_qos"] == "sensor_data"
                      else QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE))
         self.create_subscription(PointCloud2, "cloud_in", self._on_cloud, cloud_qos)
-        self.create_subscription(TFMessage, "/tf", lambda m: self.tf.add_message(m), TF_QOS)
+        self.create_subscription(TFMessage, "/tf", lambda m: self.tf.add_message(m), TF_QOS,
+                                 callback_group=tf_group)
         self.create_subscription(TFMessage, "/tf_static",
-                                 lambda m: self.tf.add_message(m, static=True), TF_STATIC_QOS)
+                                 lambda m: self.tf.add_message(m, static=True), TF_STATIC_QOS,
+                                 callback_group=tf_group)
         self.create_subscription(PointCloud2, "query_in", self._on_query, 10,
                                  callback_group=services)
         self.markers = {v: self.create_publisher(MarkerArray, t, LATCHED)
@@ -161,10 +171,12 @@ class MappingNode(Node):
 
     # --- parameters ---------------------------------------------------------------------
     def _on_set_parameters(self, changed):
-        values = dict(self.values)
+        values, reason = dict(self.values), ""
         for p in changed:
-            values[p.name] = p.value
-        reason = parameters.problem(values, self.params)
+            if p.name in self.by_name:
+                values[p.name], why = parameters.coerce(self.by_name[p.name], p.value)
+                reason = reason or why
+        reason = reason or parameters.problem(values, self.params)
         if not reason:
             try:
                 with self.lock:
@@ -279,9 +291,12 @@ class MappingNode(Node):
 
     def _publish_views(self):
         v = self.values
-        with self.lock:
-            leaves = views.occupied_leaves(self.tree, v["occupancy_min_z"], v["occupancy_max_z"])
-            grid = projection.project(self.tree, v["occupancy_min_z"], v["occupancy_max_z"])
+        with self.lock:  # only the copy out: the insert waits for nothing else
+            every = self.tree.leaves()
+            resolution, threshold = self.tree.resolution, self.tree.occupancy_thres
+        band = (v["occupancy_min_z"], v["occupancy_max_z"])
+        leaves = views.occupied_of(every, threshold, *band)
+        grid = projection.project_leaves(every, resolution, threshold, *band)
         header = self._header()
         self.cloud_pub.publish(cloud_message(header, views.cloud_columns(leaves, self.classes)))
         self.grid_pub.publish(self._grid_message(header, grid))
@@ -374,11 +389,12 @@ def main(argv=None) -> int:
     rclpy.init(args=sys.argv if argv is None else argv)
     try:
         node = MappingNode()
-    except (ValueError, RuntimeError, IndexError) as e:
-        print(f"{NODE_NAME}: {e}", file=sys.stderr)
+    except Exception as e:  # a refused parameter, class table or map file: say it and stop
+        print(f"{NODE_NAME}: {type(e).__name__}: {e}" if not isinstance(e, ValueError)
+              else f"{NODE_NAME}: {e}", file=sys.stderr)
         rclpy.try_shutdown()
         return 1
-    executor = MultiThreadedExecutor(num_threads=2)
+    executor = MultiThreadedExecutor(num_threads=3)
     executor.add_node(node)
     try:
         executor.spin()

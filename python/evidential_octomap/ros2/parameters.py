@@ -110,6 +110,19 @@ def semantic_config(values: Dict[str, Any], parameters: List[Parameter]) -> "_co
     return config
 
 
+def coerce(p: Parameter, value):
+    """(value in the parameter's type, "") or (None, why not): an integer is taken for a
+    floating-point parameter (`-p length_scale:=1`, `ds_multiplier: 2` in YAML), nothing else
+    changes type."""
+    kind = type(p.default)
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        return float(value), ""
+    if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
+        return None, (f"{p.name} must be a {kind.__name__}, got {value!r} "
+                      f"({type(value).__name__})")
+    return value, ""
+
+
 def problem(values: Dict[str, Any], parameters: List[Parameter]) -> str:
     """Why these values cannot be used together ('' when they can): the node's checks, then the
     core's validation of the settings, the kernel bound at the resolution and the sensor model."""

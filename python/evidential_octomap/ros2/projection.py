@@ -15,8 +15,12 @@ class Grid:
 
 
 def project(tree, min_z: float = -np.inf, max_z: float = np.inf) -> Grid:
-    res = tree.resolution
-    leaves = tree.leaves()
+    return project_leaves(tree.leaves(), tree.resolution, tree.occupancy_thres, min_z, max_z)
+
+
+def project_leaves(leaves, res: float, occupancy_thres: float, min_z: float = -np.inf,
+                   max_z: float = np.inf) -> Grid:
+    """The same from every leaf of a map (tree.leaves()), e.g. copied out under a lock."""
     if len(leaves.sizes) == 0:
         return Grid(np.zeros((0, 0), dtype=np.int8), (0.0, 0.0), res)
     cells = np.rint(leaves.sizes / res).astype(np.int64)
@@ -25,7 +29,7 @@ def project(tree, min_z: float = -np.inf, max_z: float = np.inf) -> Grid:
     hi = (corner + cells[:, None]).max(axis=0)
     width, height = hi - lo
     band = (leaves.centers[:, 2] >= min_z) & (leaves.centers[:, 2] <= max_z)
-    occupied = leaves.occupancy > tree.occupancy_thres
+    occupied = leaves.occupancy > occupancy_thres
     data = np.full((height, width), -1, dtype=np.int8)
     covered = np.zeros((height, width), dtype=bool)
     hit = np.zeros((height, width), dtype=bool)

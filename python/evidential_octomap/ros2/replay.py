@@ -60,6 +60,8 @@ def main(argv=None) -> int:
     p.add_argument("--scans", type=int, default=None)
     p.add_argument("--rate", type=float, default=10.0, help="scans per second (default 10)")
     p.add_argument("--paced", action="store_true", help="wait for the node after each scan")
+    p.add_argument("--loops", type=int, default=1,
+                   help="play the scans this many times (stamps go on; a benchmark)")
     p.add_argument("--status", default="/evidential_mapping_node/status")
     p.add_argument("--topic", default="/velodyne_points/evidence")
     p.add_argument("--no-tf-after", type=int, default=None, metavar="K",
@@ -109,15 +111,17 @@ def main(argv=None) -> int:
         sent += 1
         wait_for_node()
     period = 1.0 / args.rate if args.rate > 0 else 0.0
+    evidences = {}
     t_next = time.monotonic()
-    for i in range(n):
-        scan = dataset.load(i)
-        stamp = rclpy.time.Time(nanoseconds=options.start_ns + i * 100_000_000).to_msg()
-        if args.no_tf_after is None or i < args.no_tf_after:
+    scans = [dataset.load(i) for i in range(n)]
+    for k in range(n * args.loops):
+        i, scan = k % n, scans[k % n]
+        stamp = rclpy.time.Time(nanoseconds=options.start_ns + k * 100_000_000).to_msg()
+        if args.no_tf_after is None or k < args.no_tf_after:
             tf_pub.publish(TFMessage(transforms=[transform(
                 stamp, options.world_frame, options.base_frame,
                 scan.pose @ np.linalg.inv(T_base_sensor))]))
-        evidence = scan_evidence(scan, classes, options)
+        evidence = evidences.setdefault(i, scan_evidence(scan, classes, options))
         pub.publish(cloud(stamp, options.sensor_frame, {
             "x": scan.points[:, 0], "y": scan.points[:, 1], "z": scan.points[:, 2],
             "evidence": evidence}))
@@ -127,6 +131,8 @@ def main(argv=None) -> int:
         t_next += period
         time.sleep(max(0.0, t_next - time.monotonic()))
     wait_for_node()
+    # a reliable writer that goes away drops what its readers have not acknowledged yet
+    pub.wait_for_all_acked(rclpy.duration.Duration(seconds=30))
     print(json.dumps({"sent": sent}), flush=True)
     node.destroy_node()
     rclpy.try_shutdown()
