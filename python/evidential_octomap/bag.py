@@ -180,6 +180,7 @@ class MapOptions:
     probability_magnitude: float = _core.EVIDENCE_MAGNITUDE
     raw_labels: bool = False                         # `label` holds raw ids (learning map)
     max_clouds: Optional[int] = None
+    calibration: Optional[str] = None                # a file `evidential_octomap calibrate` wrote
 
 
 @dataclass
@@ -205,6 +206,8 @@ def map_bag(bag, classes, options: MapOptions = MapOptions(), model: Optional[Ca
     C = classes.num_classes
     tree = _core.EvidentialOcTree(options.resolution, classes,
                                   _core.SemanticConfig(**options.config))
+    if options.calibration:
+        tree.apply_calibration(_core.read_calibration(options.calibration))
     seconds = dict(read=0.0, decode=0.0, model=0.0, tf=0.0, insert=0.0, view=0.0)
     dropped: List[dict] = []
     sources: Dict[str, int] = {}
@@ -592,6 +595,9 @@ def _add_map_arguments(p):
     p.add_argument("--out", required=True, help="output directory (map.ot, summary, pictures)")
     p.add_argument("--topic", default=None,
                    help="PointCloud2 topic (needed when the bag has several)")
+    p.add_argument("--calibration", default=None,
+                   help="a file written by `evidential_octomap calibrate`: the read-out cap and "
+                   "the error model of the map's error_probability (docs/calibration.md)")
     p.add_argument("--input", default="auto", choices=pointcloud2.INPUTS,
                    help="semantic field to read (default auto: the first present of evidence, "
                    "alpha, logits, probabilities, label)")
@@ -670,6 +676,20 @@ def make_model(args, classes):
     return load_callable(args.model)
 
 
+def note_if_uncalibrated(result: BagMap) -> None:
+    """Says once, on stderr, that a map of network evidence read without a calibration file has
+    an uncalibrated error probability, and how to fit one."""
+    s = result.summary
+    derived = "derived" in (s["evidence_declared"] or "")
+    network = any(not src.startswith(("label", "none")) for src in s["evidence_sources"])
+    if result.tree.calibrated or derived or not network:
+        return
+    print("note: the map's error probability is uncalibrated (1 - max p of the read-out); fit it "
+          "on labelled scans of this network with\n  evidential_octomap calibrate --data "
+          "VALIDATION_DIR --classes CLASSES.yaml --evidence file --out calibration.yaml\n"
+          "and pass --calibration calibration.yaml (docs/calibration.md)", file=sys.stderr)
+
+
 def run_map(args) -> int:
     classes = _classes(args.classes)
     options = MapOptions(frame=args.frame, topic=args.topic, resolution=args.resolution,
@@ -677,7 +697,8 @@ def run_map(args) -> int:
                          label_magnitude=args.label_magnitude,
                          logit_transform=args.logit_transform,
                          probability_magnitude=args.probability_magnitude,
-                         raw_labels=args.raw_labels, max_clouds=args.max_clouds)
+                         raw_labels=args.raw_labels, max_clouds=args.max_clouds,
+                         calibration=args.calibration)
     model = make_model(args, classes)
     view = None
     if args.foxglove or args.mcap_views:
@@ -697,6 +718,7 @@ def run_map(args) -> int:
         for d in s["dropped"]:
             print(f"  dropped cloud {d['index']} ({d['stamp_ns'] / 1e9:.3f} s): {d['reason']}")
         print(f"wrote {args.out}/{{{','.join(written)}}}")
+        note_if_uncalibrated(result)
         if view is not None and args.foxglove and args.keep_serving:
             print("foxglove: serving the final map" + (" until Ctrl-C" if args.keep_serving < 0
                   else f" for {args.keep_serving:g} s"), file=sys.stderr)

@@ -167,3 +167,37 @@ def test_a_missing_topic_is_refused_naming_the_cloud_topics(bags, kitti_classes)
                        match=r"2 PointCloud2 topics.*which one should be mapped\? "
                              r"Choose it with --topic"):
         bag.map_bag(bags["ros1"][0], kitti_classes, bag.MapOptions())
+
+
+def _calibration(tmp_path, classes=""):
+    path = tmp_path / "calibration.yaml"
+    path.write_text("calibration_version: 2\ncalibration_rule: dempster\n" + classes +
+                    "evidence_cap: -1\nerror_model_terms: [intercept, vacuity]\n"
+                    "error_model_weights: [0.5, 2.0]\n")
+    return path
+
+
+def test_network_evidence_without_a_calibration_gets_one_note(tmp_path, mapped, capsys):
+    tree, summary, _, _ = mapped["ros1"]
+    network = dict(summary, evidence_declared="network evidence: the dataset's evidence files")
+    bag.note_if_uncalibrated(bag.BagMap(tree, summary))  # derived one-hot: nothing to calibrate
+    assert capsys.readouterr().err == ""
+    bag.note_if_uncalibrated(bag.BagMap(tree, network))
+    err = capsys.readouterr().err
+    assert "uncalibrated" in err and "evidential_octomap calibrate" in err
+    calibrated = eo.EvidentialOcTree(0.2, 3)
+    calibrated.apply_calibration(eo.read_calibration(str(_calibration(tmp_path))))
+    bag.note_if_uncalibrated(bag.BagMap(calibrated, network))
+    assert capsys.readouterr().err == ""
+
+
+def test_map_reads_a_calibration_file_and_refuses_one_of_other_classes(tmp_path, bags):
+    path = bags["mcap"][0]
+    command = [sys.executable, "-m", "evidential_octomap.bag", "map", str(path), "--classes",
+               str(CLASSES), "--out", str(tmp_path / "out"), "--topic",
+               "/velodyne_points/evidence", "--no-render", "-q", "--calibration"]
+    run = subprocess.run(command + [str(_calibration(tmp_path))], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    other = _calibration(tmp_path, "calibration_classes: [road, grass]\n")
+    run = subprocess.run(command + [str(other)], capture_output=True, text=True)
+    assert run.returncode != 0 and "fitted for 2 classes [road, grass]" in run.stderr
