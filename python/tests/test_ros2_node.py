@@ -48,7 +48,8 @@ def node(tmp_path_factory):
          "-r", "cloud_in:=/velodyne_points/evidence", "-p", "cloud_in_qos:=reliable",
          "-p", "publish_rate:=2.0", "-p", f"save_path:={out / 'saved' / 'map.ot'}",
          "-p", "autosave_period:=1.0", "-p", f"autosave_path:={out / 'autosave.ot'}",
-         "-p", "transform_timeout:=0.3"], stdout=log, stderr=subprocess.STDOUT, env=env())
+         "-p", "transform_timeout:=0.3", "-p", "foxglove_port:=0"], stdout=log,
+        stderr=subprocess.STDOUT, env=env())
     yield process, out
     process.terminate()
     try:
@@ -216,6 +217,34 @@ def test_a_query_answers_the_labels_of_the_map(saved, client):
     client.destroy_publisher(pub)
 
 
+def test_foxglove_gets_the_live_map(saved, node):
+    """foxglove_port: a Foxglove client (WebSocket, foxglove.sdk.v1) gets one cube per occupied
+    leaf of the map the node saved."""
+    websockets = pytest.importorskip("websockets", reason="the test extra")
+    import asyncio
+    from test_bag_foxglove import cubes_of
+    log = (node[1] / "node.log").read_text()
+    port = int(log.split("foxglove: open ws://127.0.0.1:")[1].split()[0])
+
+    async def first_scene():
+        async with websockets.connect(f"ws://127.0.0.1:{port}", max_size=None,
+                                      subprotocols=["foxglove.sdk.v1"]) as ws:
+            channels = {}
+            while "/map/voxels/class" not in channels:
+                msg = json.loads(await asyncio.wait_for(ws.recv(), 20))
+                if msg["op"] == "advertise":
+                    channels.update({c["topic"]: c["id"] for c in msg["channels"]})
+            await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                {"id": 3, "channelId": channels["/map/voxels/class"]}]}))
+            while True:
+                data = await asyncio.wait_for(ws.recv(), 20)
+                if isinstance(data, bytes) and data[0] == 1:
+                    return data[13:]
+
+    cubes = cubes_of(asyncio.run(first_scene()))
+    assert len(cubes) == len(eo.load(saved / "map.ot").leaves(occupied_only=True).sizes)
+
+
 def set_parameter(client, name, value):
     p = Parameter(name=name, value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE,
                                                   double_value=value))
@@ -264,8 +293,19 @@ def test_at_10_hz_every_cloud_is_inserted_or_counted_as_dropped(saved, client, n
                if n > before["dropped_by_reason"].get(k, 0)}
     # What DDS delivered is accounted for cloud by cloud: inserted, or dropped with a reason
     # (a full queue, most of them, or a transform that came too late on a loaded machine).
-    assert sent == 10 and received <= sent
+    lost = s["clouds_lost_in_dds"] - before["clouds_lost_in_dds"]
+    assert sent == 10 and received + lost <= sent
     assert inserted + sum(dropped.values()) == received and inserted >= 1
     assert set(dropped) <= {"queue_full", "no_transform"}, s["last_drop"]
-    print(f"10 Hz: {received} of {sent} clouds received, {inserted} inserted, dropped {dropped}; "
-          f"median insert {s['insert_ms_median']} ms")
+    print(f"10 Hz: {received} of {sent} clouds received ({lost} reported lost in DDS), "
+          f"{inserted} inserted, dropped {dropped}; median insert {s['insert_ms_median']} ms")
+
+
+def test_the_console_script_refuses_a_bad_parameter_at_start_up():
+    script = os.path.join(os.path.dirname(sys.executable), "evidential_octomap_ros2")
+    if not os.path.isfile(script):
+        pytest.skip("the console script comes with pip install (not a source checkout)")
+    run = subprocess.run([script, "--ros-args", "-p", "resolution:=-0.5"], capture_output=True,
+                         text=True, env=env(), timeout=60)
+    assert run.returncode == 1
+    assert "parameter refused: resolution = -0.5 must be finite and > 0" in run.stderr

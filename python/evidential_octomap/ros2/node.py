@@ -24,6 +24,7 @@ try:
     from nav_msgs.msg import OccupancyGrid
     from rcl_interfaces.msg import ParameterDescriptor, SetParametersResult
     from rclpy.callback_groups import MutuallyExclusiveCallbackGroup
+    from rclpy.event_handler import SubscriptionEventCallbacks
     from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
     from rclpy.node import Node
     from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy,
@@ -43,7 +44,8 @@ except ImportError:  # pragma: no cover
 
 NODE_NAME = "evidential_mapping_node"
 # Latched, as the ROS 1 node's map topics: a late subscriber gets the last message.
-LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
+                     reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
 TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 TF_STATIC_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
@@ -102,7 +104,9 @@ class MappingNode(Node):
         services, tf_group = MutuallyExclusiveCallbackGroup(), MutuallyExclusiveCallbackGroup()
         cloud_qos = (qos_profile_sensor_data if self.values["cloud_in_qos"] == "sensor_data"
                      else QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE))
-        self.create_subscription(PointCloud2, "cloud_in", self._on_cloud, cloud_qos)
+        self.create_subscription(PointCloud2, "cloud_in", self._on_cloud, cloud_qos,
+                                 event_callbacks=SubscriptionEventCallbacks(
+                                     message_lost=self._on_lost))
         self.create_subscription(TFMessage, "/tf", lambda m: self.tf.add_message(m), TF_QOS,
                                  callback_group=tf_group)
         self.create_subscription(TFMessage, "/tf_static",
@@ -124,6 +128,13 @@ class MappingNode(Node):
             self.create_timer(self.values["autosave_period"], self._autosave,
                               callback_group=services)
         self.add_on_set_parameters_callback(self._on_set_parameters)
+        self.foxglove = None
+        if self.values["foxglove_port"] >= 0:
+            from ..foxglove_view import FoxgloveView
+            self.foxglove = FoxgloveView(self.classes, frame=self.values["frame_id"],
+                                         port=self.values["foxglove_port"])
+            self.get_logger().info(f"foxglove: open ws://127.0.0.1:{self.foxglove.port} in "
+                                   "Foxglove (Open connection -> Foxglove WebSocket)")
         self.threads = [threading.Thread(target=self._insert_loop, name="insert", daemon=True),
                         threading.Thread(target=self._view_loop, name="views", daemon=True)]
         for t in self.threads:
@@ -202,6 +213,14 @@ class MappingNode(Node):
             self._drop(QUEUE_FULL, pushed_out, "the insert queue was full (insert_queue_size "
                        f"{self.values['insert_queue_size']}): a newer cloud replaced it")
 
+    def _on_lost(self, info):
+        """Clouds DDS lost before the node saw them (its reader's history overflowed, or
+        fragments of a best-effort cloud went missing), as the middleware counts them."""
+        self.status.lost_in_dds(info.total_count)
+        self.get_logger().warning(f"{info.total_count_change} cloud(s) lost in DDS before "
+                                  f"reaching the node ({info.total_count} in all)",
+                                  throttle_duration_sec=2.0)
+
     def _drop(self, kind, msg, reason):
         frame = msg.header.frame_id
         text = f"cloud dropped (frame {frame}, {stamp_ns(msg.header.stamp) / 1e9:.3f} s): {reason}"
@@ -243,6 +262,10 @@ class MappingNode(Node):
             with self.lock:
                 self.tree.insert_scan(cloud.points, evidence, pose=pose)
                 self.status.set_map(self.tree)
+                if self.foxglove is not None:  # the cloud, the pose, the map when due
+                    self.foxglove.update(self.tree, cloud.points, pose,
+                                         stamp_ns(msg.header.stamp), msg.header.frame_id,
+                                         evidence)
         except ValueError as e:
             return self._drop(REFUSED, msg, f"evidence refused: {e}; map unchanged")
         self.status.inserted_cloud(len(cloud.points), time.monotonic() - t0)
@@ -272,8 +295,12 @@ class MappingNode(Node):
 
     # --- outputs --------------------------------------------------------------------------
     def _view_loop(self):
-        last = 0.0
+        last = foxglove_last = 0.0
         while self.running:
+            if self.foxglove is not None and time.monotonic() - foxglove_last >= 2.0:
+                foxglove_last = time.monotonic()  # for Foxglove clients that joined since
+                with self.lock:
+                    self.foxglove.publish(self.tree)
             rate = self.values["publish_rate"]
             period = 1.0 / rate if rate > 0 else 0.0
             new_subscriber = any(self.markers[v].get_subscription_count() > n
@@ -382,6 +409,8 @@ class MappingNode(Node):
         self.queue.close()
         for t in self.threads:
             t.join(timeout=5)
+        if self.foxglove is not None:
+            self.foxglove.close()
 
 
 def main(argv=None) -> int:

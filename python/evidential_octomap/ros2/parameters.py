@@ -71,6 +71,9 @@ def _node_parameters() -> List[Parameter]:
           check=_NOT_NAN),
         P("occupancy_max_z", math.inf, "leaves in projected_map up to this height [m]",
           check=_NOT_NAN),
+        P("foxglove_port", -1, "> 0: serve the map to Foxglove on this port of 127.0.0.1 (0: a "
+          "free port, said in the log; -1: off); foxglove-sdk, the bag mapper's view",
+          read_only=True),
         P("save_path", "map.ot", "where ~/save_map writes the map (.ot, and the occupancy .bt "
           "beside it); relative: from the node's working directory"),
         P("autosave_period", 0.0, "every this many seconds the map, when it changed, is written "

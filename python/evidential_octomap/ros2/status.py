@@ -16,6 +16,7 @@ class Status:
         self._lock = threading.Lock()
         self.started = time.monotonic()
         self.received = 0
+        self.lost = 0
         self.inserted = 0
         self.points = 0
         self.dropped = Counter()
@@ -23,6 +24,11 @@ class Status:
         self.insert_ms = deque(maxlen=100)
         self.map = {}
         self.events = deque(maxlen=10)  # parameter changes, saves, resets, with their results
+
+    def lost_in_dds(self, total: int):
+        """Clouds the middleware lost before the node saw them (not received, not dropped)."""
+        with self._lock:
+            self.lost = total
 
     def received_cloud(self):
         with self._lock:
@@ -57,6 +63,7 @@ class Status:
             return {
                 "uptime_s": round(time.monotonic() - self.started, 3),
                 "clouds_received": self.received,
+                "clouds_lost_in_dds": self.lost,
                 "clouds_inserted": self.inserted,
                 "points_inserted": self.points,
                 "clouds_dropped": sum(self.dropped.values()),

@@ -35,7 +35,8 @@ class _Subset:
 
 
 def packed_rgb(rgb01: np.ndarray) -> np.ndarray:
-    """(N,) float32 whose bits are 0x00RRGGBB (PCL's and rviz's `rgb` field) of colours in [0, 1]."""
+    """(N,) float32 whose bits are 0x00RRGGBB (PCL's and rviz's `rgb` field) of colours in
+    [0, 1]."""
     c = np.clip(np.round(np.asarray(rgb01)[:, :3] * 255), 0, 255).astype(np.uint32)
     return ((c[:, 0] << 16) | (c[:, 1] << 8) | c[:, 2]).view(np.float32)
 
