@@ -12,19 +12,21 @@ import time
 import numpy as np
 import pytest
 
-rclpy = pytest.importorskip("rclpy", reason="the ROS 2 wheels: pip install './python/"
-                            "ros2_interfaces' '.[ros2]'")
-pytest.importorskip("tf2_msgs", reason="tf2_msgs: pip install ./python/ros2_interfaces")
+rclpy = pytest.importorskip("rclpy", reason="the ROS 2 wheels: pip install '.[ros2]'")
+for interfaces in ("tf2_msgs", "evidential_octomap_msgs"):
+    pytest.importorskip(interfaces, reason=f"{interfaces}: pip install "
+                        f"./python/ros2_interfaces/{interfaces}")
 
 import evidential_octomap as eo  # noqa: E402
-from evidential_octomap import pointcloud2  # noqa: E402
 from evidential_octomap.ros2.node import LATCHED, MARKER_TOPICS  # noqa: E402
 from nav_msgs.msg import OccupancyGrid  # noqa: E402
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue  # noqa: E402
 from rcl_interfaces.srv import SetParameters  # noqa: E402
-from sensor_msgs.msg import PointCloud2, PointField  # noqa: E402
+from sensor_msgs.msg import PointCloud2  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 from std_srvs.srv import Trigger  # noqa: E402
+from evidential_octomap_msgs.srv import QueryMap, SaveMap  # noqa: E402
+from geometry_msgs.msg import Point  # noqa: E402
 from visualization_msgs.msg import MarkerArray  # noqa: E402
 
 from conftest import KITTI, REPO  # noqa: E402
@@ -117,9 +119,11 @@ def replayed(node, client):
 
 @pytest.fixture(scope="module")
 def saved(replayed, client, node):
-    response = call(client, Trigger, f"{NODE}/save_map", Trigger.Request())
+    path = node[1] / "saved" / "run1.ot"
+    response = call(client, SaveMap, f"{NODE}/save_map", SaveMap.Request(path=str(path)))
     assert response.success, response.message
-    return node[1] / "saved"
+    assert response.path == str(path)
+    return path.parent
 
 
 def test_a_malformed_cloud_and_a_missing_transform_are_dropped_with_their_reason(replayed,
@@ -133,10 +137,12 @@ def test_a_malformed_cloud_and_a_missing_transform_are_dropped_with_their_reason
     assert "field 'evidence' has count 2, expected C = 20 (num_classes); map unchanged" in log
 
 
-def test_save_map_writes_the_ot_and_the_bt(saved, replayed):
-    tree = eo.load(saved / "map.ot")
+def test_save_map_writes_the_ot_and_the_bt(saved, replayed, client, node):
+    tree = eo.load(saved / "run1.ot")
     assert tree.num_leaves == replayed["map"]["leaves"]
-    assert (saved / "map.bt").read_bytes().startswith(b"# Octomap OcTree binary file")
+    assert (saved / "run1.bt").read_bytes().startswith(b"# Octomap OcTree binary file")
+    response = call(client, SaveMap, f"{NODE}/save_map", SaveMap.Request(path=""))  # save_path
+    assert response.success and (node[1] / "saved" / "map.ot").is_file(), response.message
 
 
 def test_the_map_equals_the_python_api_and_the_cli_maps_of_the_same_scans(saved, tmp_path,
@@ -153,7 +159,7 @@ def test_the_map_equals_the_python_api_and_the_cli_maps_of_the_same_scans(saved,
         points.append(scan.points_world())
     points = np.concatenate(points)[np.random.default_rng(0).choice(
         sum(len(p) for p in points), 20_000, replace=False)]
-    labels = eo.load(saved / "map.ot").query(points).labels
+    labels = eo.load(saved / "run1.ot").query(points).labels
     maps = {"python": reference}
     if cli_binary() is not None:
         subprocess.run([str(cli_binary()), "map", "--data", str(KITTI), "--classes",
@@ -168,7 +174,7 @@ def test_the_map_equals_the_python_api_and_the_cli_maps_of_the_same_scans(saved,
 
 
 def test_a_late_subscriber_gets_the_latched_views(saved, client):
-    occupied = eo.load(saved / "map.ot").leaves(occupied_only=True)
+    occupied = eo.load(saved / "run1.ot").leaves(occupied_only=True)
     cloud = latched(client, PointCloud2, "/semantic_cloud")
     assert cloud.width == len(occupied.sizes)
     assert [f.name for f in cloud.fields] == ["x", "y", "z", "label", "uncertainty", "rgb",
@@ -195,26 +201,20 @@ def test_every_topic_of_the_rviz2_config_is_one_the_node_has(replayed, client):
 
 
 def test_a_query_answers_the_labels_of_the_map(saved, client):
-    points = np.array([[5.0, 0.0, -1.5], [0.0, 5.0, -1.5], [500.0, 0.0, 0.0]], np.float32)
-    rows, step, data = pointcloud2.pack({"x": points[:, 0], "y": points[:, 1],
-                                         "z": points[:, 2]})
-    query = PointCloud2(height=1, width=3, point_step=step, row_step=3 * step, is_dense=True)
-    query.header.frame_id = "map"
-    query.fields = [PointField(name=a, offset=o, datatype=d, count=c) for a, o, d, c in rows]
-    query.data = data.tobytes()
-    answers = []
-    sub = client.create_subscription(PointCloud2, "/query_out", answers.append, 10)
-    pub = client.create_publisher(PointCloud2, "/query_in", 10)
-    assert spin_until(client, lambda: pub.get_subscription_count() > 0)
-    pub.publish(query)
-    assert spin_until(client, lambda: answers)
-    answer = pointcloud2.all_fields(answers[0])
-    expected = eo.load(saved / "map.ot").query(points)
-    np.testing.assert_array_equal(answer["label"], expected.labels)
-    np.testing.assert_allclose(answer["error_probability"], expected.error_probability)
-    assert answer["label"][2] == -1 and answer["known"][2] == 0  # far outside the map
-    client.destroy_subscription(sub)
-    client.destroy_publisher(pub)
+    points = np.array([[5.0, 0.0, -1.5], [0.0, 5.0, -1.5], [12.0, -3.0, -1.0],
+                       [500.0, 0.0, 0.0]], np.float32)
+    request = QueryMap.Request(points=[Point(x=float(x), y=float(y), z=float(z))
+                                       for x, y, z in points])
+    answer = call(client, QueryMap, f"{NODE}/query", request)
+    expected = eo.load(saved / "run1.ot").query(points)
+    np.testing.assert_array_equal(answer.labels, expected.labels)
+    np.testing.assert_allclose(answer.error_probabilities, expected.error_probability)
+    np.testing.assert_allclose(np.reshape(answer.beliefs, (4, -1)), expected.belief)
+    assert answer.num_classes == 20 and (expected.labels[:3] >= 0).any()
+    assert answer.labels[3] == -1 and answer.class_names[3] == "" and answer.occupancy[3] == -1
+    names = eo.bundled_class_table("semantickitti").names
+    assert all(n == (names[c] if c >= 0 else "") for n, c in zip(answer.class_names,
+                                                                  answer.labels))
 
 
 def test_foxglove_gets_the_live_map(saved, node):
@@ -242,7 +242,7 @@ def test_foxglove_gets_the_live_map(saved, node):
                     return data[13:]
 
     cubes = cubes_of(asyncio.run(first_scene()))
-    assert len(cubes) == len(eo.load(saved / "map.ot").leaves(occupied_only=True).sizes)
+    assert len(cubes) == len(eo.load(saved / "run1.ot").leaves(occupied_only=True).sizes)
 
 
 def set_parameter(client, name, value):

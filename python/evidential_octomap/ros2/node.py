@@ -37,10 +37,13 @@ except ImportError as e:  # pragma: no cover - said once, plainly
     raise SystemExit(f"evidential_octomap.ros2 needs the ROS 2 wheels ({e}): pip install "
                      "\".[ros2]\"") from None
 try:
+    from evidential_octomap_msgs.srv import QueryMap, SaveMap
     from tf2_msgs.msg import TFMessage
-except ImportError:  # pragma: no cover
-    raise SystemExit("evidential_octomap.ros2 needs tf2_msgs, which no wheel provides: pip "
-                     "install ./python/ros2_interfaces (it generates it from its .msg)") from None
+except ImportError as e:  # pragma: no cover
+    raise SystemExit(f"evidential_octomap.ros2 needs interfaces no wheel provides ({e}): pip "
+                     "install ./python/ros2_interfaces/tf2_msgs "
+                     "./python/ros2_interfaces/evidential_octomap_msgs (they generate them)") \
+        from None
 
 NODE_NAME = "evidential_mapping_node"
 # Latched, as the ROS 1 node's map topics: a late subscriber gets the last message.
@@ -112,16 +115,14 @@ class MappingNode(Node):
         self.create_subscription(TFMessage, "/tf_static",
                                  lambda m: self.tf.add_message(m, static=True), TF_STATIC_QOS,
                                  callback_group=tf_group)
-        self.create_subscription(PointCloud2, "query_in", self._on_query, 10,
-                                 callback_group=services)
         self.markers = {v: self.create_publisher(MarkerArray, t, LATCHED)
                         for v, t in MARKER_TOPICS.items()}
         self.marker_subscribers = {v: 0 for v in MARKER_TOPICS}
         self.cloud_pub = self.create_publisher(PointCloud2, "semantic_cloud", LATCHED)
         self.grid_pub = self.create_publisher(OccupancyGrid, "projected_map", LATCHED)
-        self.query_pub = self.create_publisher(PointCloud2, "query_out", 10)
         self.status_pub = self.create_publisher(String, "~/status", LATCHED)
-        self.create_service(Trigger, "~/save_map", self._on_save, callback_group=services)
+        self.create_service(SaveMap, "~/save_map", self._on_save, callback_group=services)
+        self.create_service(QueryMap, "~/query", self._on_query, callback_group=services)
         self.create_service(Trigger, "~/reset", self._on_reset, callback_group=services)
         self.create_timer(1.0, self._publish_status, callback_group=services)
         if self.values["autosave_period"] > 0:
@@ -272,26 +273,24 @@ class MappingNode(Node):
         self.unsaved = True
         self.changed.set()
 
-    def _on_query(self, msg):
-        """query_in (x, y, z) -> query_out: per point label, error_probability, uncertainty (u),
-        conflict, occupied, known and belief (count C), in the query's frame and order."""
-        f = pointcloud2.all_fields(msg)
-        points = np.column_stack([f["x"], f["y"], f["z"]]).astype(np.float32)
-        frame = msg.header.frame_id or self.values["frame_id"]
-        try:
-            T = self.tf.lookup(self.values["frame_id"], frame, stamp_ns(msg.header.stamp),
-                               self.values["transform_timeout"])
-        except TfError as e:
-            self.get_logger().error(f"query refused: {e}")
-            return
-        world = (points @ T[:3, :3].T + T[:3, 3]).astype(np.float32)
+    def _on_query(self, request, response):
+        """The ROS 1 node's QueryMap: points in frame_id -> label (-1 unknown or no evidence),
+        class name, u, conflict, occupancy (1 occupied, 0 free, -1 unknown: the bindings' query
+        has no probability), the beliefs (N x C, row-major) and P(label wrong)."""
+        points = np.array([[p.x, p.y, p.z] for p in request.points], dtype=np.float32)
+        points = points.reshape(-1, 3)
         with self.lock:
-            r = self.tree.query(world)
-        self.query_pub.publish(cloud_message(msg.header, {
-            "x": points[:, 0], "y": points[:, 1], "z": points[:, 2], "label": r.labels,
-            "error_probability": r.error_probability, "uncertainty": r.uncertainty,
-            "conflict": r.conflict, "occupied": r.occupied.astype(np.uint8),
-            "known": r.known.astype(np.uint8), "belief": np.asarray(r.belief, np.float32)}))
+            r = self.tree.query(points)
+        names = list(self.classes.names)
+        response.labels = r.labels.tolist()
+        response.class_names = [names[c] if c >= 0 else "" for c in r.labels.tolist()]
+        response.uncertainties = r.uncertainty.astype(np.float32).tolist()
+        response.conflicts = r.conflict.astype(np.float32).tolist()
+        response.occupancy = np.where(r.known, r.occupied.astype(np.float32), -1.0).tolist()
+        response.beliefs = np.asarray(r.belief, np.float32).reshape(-1).tolist()
+        response.error_probabilities = r.error_probability.astype(np.float32).tolist()
+        response.num_classes = self.classes.num_classes
+        return response
 
     # --- outputs --------------------------------------------------------------------------
     def _view_loop(self):
@@ -368,15 +367,19 @@ class MappingNode(Node):
 
     # --- services -------------------------------------------------------------------------
     def _on_save(self, request, response):
-        ot = Path(self.values["save_path"]).expanduser().resolve()
-        bt = ot.with_suffix(".bt")
+        """SaveMap: the map as .ot (atomic) and its occupancy as .bt beside it; a path ending in
+        .bt writes the .bt only (as the ROS 1 node). "" = save_path."""
+        path = Path(request.path or self.values["save_path"]).expanduser().resolve()
         try:
-            ot.parent.mkdir(parents=True, exist_ok=True)
+            path.parent.mkdir(parents=True, exist_ok=True)
             with self.lock:
-                self.tree.save(str(ot))
-                self.tree.save_occupancy(str(bt))
+                if path.suffix != ".bt":
+                    self.tree.save(str(path))
+                self.tree.save_occupancy(str(path.with_suffix(".bt")))
                 leaves = self.tree.num_leaves
-            response.success, response.message = True, f"wrote {ot} and {bt} ({leaves} leaves)"
+            written = ([path] if path.suffix == ".bt" else [path, path.with_suffix(".bt")])
+            response.success, response.path = True, str(path)
+            response.message = f"wrote {' and '.join(map(str, written))} ({leaves} leaves)"
         except (RuntimeError, OSError) as e:
             response.success, response.message = False, f"map not saved: {e}"
         self.status.event(response.message)
