@@ -101,6 +101,7 @@ class MappingNode(Node):
         self.force_views = threading.Event()
         self.unsaved = False
         self.running = True
+        self.view_lock_s = 0.0
 
         # clouds, TF and services each in their own group, so a burst of clouds never holds
         # up the transforms they wait for, nor a service call
@@ -301,7 +302,8 @@ class MappingNode(Node):
                 with self.lock:
                     self.foxglove.publish(self.tree)
             rate = self.values["publish_rate"]
-            period = 1.0 / rate if rate > 0 else 0.0
+            # the views hold the map lock while they copy the leaves: at most a fifth of the time
+            period = max(1.0 / rate if rate > 0 else 0.0, 4.0 * self.view_lock_s)
             new_subscriber = any(self.markers[v].get_subscription_count() > n
                                  for v, n in self.marker_subscribers.items())
             due = self.changed.is_set() and time.monotonic() - last >= period
@@ -317,9 +319,12 @@ class MappingNode(Node):
 
     def _publish_views(self):
         v = self.values
+        t0 = time.monotonic()
         with self.lock:  # only the copy out: the insert waits for nothing else
             every = self.tree.leaves()
             resolution, threshold = self.tree.resolution, self.tree.occupancy_thres
+        self.view_lock_s = time.monotonic() - t0
+        self.status.views(self.view_lock_s)
         band = (v["occupancy_min_z"], v["occupancy_max_z"])
         leaves = views.occupied_of(every, threshold, *band)
         grid = projection.project_leaves(every, resolution, threshold, *band)

@@ -17,6 +17,8 @@ class Status:
         self.started = time.monotonic()
         self.received = 0
         self.lost = 0
+        self.views_published = 0
+        self.views_lock_ms = None
         self.inserted = 0
         self.points = 0
         self.dropped = Counter()
@@ -46,6 +48,11 @@ class Status:
             self.points += points
             self.insert_ms.append(1000.0 * seconds)
 
+    def views(self, lock_seconds: float):
+        with self._lock:
+            self.views_published += 1
+            self.views_lock_ms = 1000.0 * lock_seconds
+
     def event(self, text: str):
         with self._lock:
             self.events.append(text)
@@ -73,6 +80,9 @@ class Status:
                 "insert_ms_median": round(statistics.median(times), 1) if times else None,
                 "insert_ms_last": round(times[-1], 1) if times else None,
                 "map": self.map,
+                "views_published": self.views_published,
+                "views_lock_ms": (round(self.views_lock_ms, 1) if self.views_lock_ms is not None
+                                  else None),
                 "events": list(self.events),
             }
 
