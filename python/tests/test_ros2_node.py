@@ -309,3 +309,34 @@ def test_the_console_script_refuses_a_bad_parameter_at_start_up():
                          text=True, env=env(), timeout=60)
     assert run.returncode == 1
     assert "parameter refused: resolution = -0.5 must be finite and > 0" in run.stderr
+
+
+def test_raw_clouds_are_mapped_through_the_model_parameter(tmp_path):
+    """`model`: a user's callable turns raw clouds (x, y, z, intensity) into evidence."""
+    (tmp_path / "my_model.py").write_text(
+        "import numpy as np\n"
+        "def evidence(points, fields):\n"
+        "    e = np.zeros((len(points), 20), np.float32)\n"
+        "    e[:, 9] = 5.0 + 0 * fields['intensity']  # 'road' everywhere\n"
+        "    return e\n")
+    domain = str(int(DOMAIN) + 1)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "evidential_octomap.ros2", "--ros-args", "-r",
+         "cloud_in:=/velodyne_points", "-p", "cloud_in_qos:=reliable", "-p",
+         f"model:={tmp_path / 'my_model.py'}:evidence", "-p", "autosave_period:=0.5", "-p",
+         f"autosave_path:={tmp_path / 'raw.ot'}"], stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL, env=dict(env(), ROS_DOMAIN_ID=domain))
+    try:
+        run = subprocess.run(
+            [sys.executable, "-m", "evidential_octomap.ros2.replay", str(KITTI), "--scans", "1",
+             "--raw", "--topic", "/velodyne_points", "--paced"], capture_output=True, text=True,
+            env=dict(env(), ROS_DOMAIN_ID=domain), timeout=120)
+        assert run.returncode == 0, run.stderr
+        end = time.monotonic() + 20
+        while not (tmp_path / "raw.ot").is_file() and time.monotonic() < end:
+            time.sleep(0.2)
+        labels = eo.load(tmp_path / "raw.ot").leaves(occupied_only=True).labels
+        assert set(np.unique(labels[labels >= 0])) == {9}
+    finally:
+        process.terminate()
+        process.wait(timeout=10)

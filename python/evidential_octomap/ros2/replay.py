@@ -64,6 +64,8 @@ def main(argv=None) -> int:
                    help="play the scans this many times (stamps go on; a benchmark)")
     p.add_argument("--status", default="/evidential_mapping_node/status")
     p.add_argument("--topic", default="/velodyne_points/evidence")
+    p.add_argument("--raw", action="store_true",
+                   help="publish the raw clouds (x, y, z, intensity) instead of the evidence ones")
     p.add_argument("--no-tf-after", type=int, default=None, metavar="K",
                    help="publish no /tf from scan K on (those clouds have no transform)")
     p.add_argument("--malformed-first", action="store_true",
@@ -121,10 +123,12 @@ def main(argv=None) -> int:
             tf_pub.publish(TFMessage(transforms=[transform(
                 stamp, options.world_frame, options.base_frame,
                 scan.pose @ np.linalg.inv(T_base_sensor))]))
-        evidence = evidences.setdefault(i, scan_evidence(scan, classes, options))
-        pub.publish(cloud(stamp, options.sensor_frame, {
-            "x": scan.points[:, 0], "y": scan.points[:, 1], "z": scan.points[:, 2],
-            "evidence": evidence}))
+        columns = {"x": scan.points[:, 0], "y": scan.points[:, 1], "z": scan.points[:, 2]}
+        if args.raw:
+            columns["intensity"] = scan.remission
+        else:
+            columns["evidence"] = evidences.setdefault(i, scan_evidence(scan, classes, options))
+        pub.publish(cloud(stamp, options.sensor_frame, columns))
         sent += 1
         rclpy.spin_once(node, timeout_sec=0.0)
         wait_for_node()
