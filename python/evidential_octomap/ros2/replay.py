@@ -21,12 +21,11 @@ from ..tf_buffer import quaternion
 
 import rclpy  # noqa: E402
 from geometry_msgs.msg import TransformStamped  # noqa: E402
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: E402
 from sensor_msgs.msg import PointCloud2, PointField  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 
-from .node import LATCHED, TF_STATIC_QOS, stamp_ns  # noqa: E402,F401
+from .node import LATCHED, TF_STATIC_QOS  # noqa: E402
 
 
 def transform(stamp, parent, child, M):
