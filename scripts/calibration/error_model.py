@@ -87,8 +87,8 @@ def section_table(all_sections):
     header = ("| dataset | protocol | evidence | ECE: dempster → calibrated | Brier: dempster → "
               "calibrated | Δ Brier [95 % CI] | best other Brier (rule) | AUROC: dempster "
               "1 − max p → calibrated error probability | best other output's AUROC | sbki u "
-              "AUROC | mIoU all (dempster / calibrated) | ECE ≤ %.2f, Brier ≤ every rule, AUROC "
-              "≥ every output |\n" % ECE_TARGET + "|---" * 12 + "|\n")
+              "AUROC | mIoU all (dempster / calibrated) | ECE ≤ " + str(ECE_TARGET) + ", Brier ≤ "
+              "every rule, AUROC ≥ every output |\n" + "|---" * 12 + "|\n")
     return header + "\n".join(rows) + "\n"
 
 
