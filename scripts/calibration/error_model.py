@@ -82,6 +82,20 @@ def section_row(key, runs, boot):
                 mark(cal_auroc >= best_auroc)))
 
 
+def targets_summary(all_sections):
+    met = [0, 0, 0]
+    keys = [k for k, v in all_sections.items() if CALIBRATED in v[0]]
+    for k in keys:
+        runs = all_sections[k][0]
+        cal = runs[CALIBRATED]
+        met[0] += cal["map"]["ece"] <= ECE_TARGET
+        met[1] += cal["map"]["brier"] <= best_other_brier(runs)[0]
+        met[2] += auroc(cal, "error_probability") >= best_other_output(runs)[0]
+    return ("Targets met, of %d sections: calibrated ECE ≤ %s in %d; Brier ≤ every other rule's "
+            "in %d; AUROC of the error probability ≥ every output of every rule in %d.\n" % (
+                len(keys), ECE_TARGET, *met))
+
+
 def section_table(all_sections):
     rows = [section_row(k, *v) for k, v in sorted(all_sections.items()) if CALIBRATED in v[0]]
     header = ("| dataset | protocol | evidence | ECE: dempster → calibrated | Brier: dempster → "
@@ -149,6 +163,7 @@ AUROC of u, 1 − max p, conflict and dissonance of every row (the calibrated ro
 calibrated minus dempster, paired bootstrap over 10 m blocks.
 
 {section_table(all_sections)}
+{targets_summary(all_sections)}
 {uncalibrated_summary(all_sections)}
 ## How many labelled scans
 
