@@ -12,6 +12,7 @@ namespace evidential_octomap::tools {
 namespace {
 struct ExportOptions {
   std::string map, classes, color_octree, binary, mode = "class";
+  std::shared_ptr<const Calibration> calibration;
 };
 
 // A table with the map's own class names and a fixed distinct palette, for maps whose class
@@ -37,6 +38,7 @@ void runExport(const ExportOptions& o) {
     throw std::runtime_error("nothing to export: give --color-octree and/or --binary");
   }
   const std::unique_ptr<EvidentialOcTree> tree = loadMap(o.map);
+  if (o.calibration) applyCalibration(*o.calibration, tree.get());
   if (!o.color_octree.empty()) {
     ClassTable classes = o.classes.empty() ? defaultTable(*tree) : ClassTable::load(o.classes);
     if (classes.numClasses() != tree->numClasses()) {
@@ -67,12 +69,14 @@ void addExportCommand(CLI::App& app) {
   cmd->add_option("--color-octree", o->color_octree, "Output ColorOcTree (.ot)");
   cmd->add_option("--binary", o->binary, "Output occupancy-only OcTree (.bt)");
   cmd->add_option("--mode", o->mode,
-                  "Colours: class, uncertainty (P(label wrong) = 1 - max p) or vacuity (u)")
+                  "Colours: class, uncertainty (P(label wrong): the --calibration file's error "
+                  "model, else 1 - max p) or vacuity (u)")
       ->check(CLI::IsMember({"class", "uncertainty", "vacuity"}))
       ->capture_default_str();
   cmd->add_option("--classes", o->classes,
                   "Class table YAML for class colours (default: generated palette)")
       ->check(CLI::ExistingFile);
+  addCalibrationOption(cmd, &o->calibration);
   cmd->callback([o]() { runExport(*o); });
 }
 

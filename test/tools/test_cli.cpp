@@ -17,6 +17,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -275,6 +276,31 @@ TEST_F(CliEndToEnd, ExportAndMergeWriteReadableMaps) {
   r = run("info " + out_ + "/merged.ot");
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("EvidentialOcTree"), std::string::npos);
+}
+
+// export --mode uncertainty colours the calibration's error probability: a model that gives
+// every labelled voxel the same P(wrong) (an intercept alone) paints them all one colour.
+TEST_F(CliEndToEnd, ExportColoursTheCalibrationsErrorProbability) {
+  ASSERT_EQ(map_result_.status, 0) << map_result_.output;
+  const std::string map = out_ + "/map/map.ot", file = out_ + "/constant_error.yaml";
+  std::ofstream(file) << "calibration_version: 2\ncalibration_rule: dempster\nevidence_cap: -1\n"
+                         "error_model_terms: [intercept]\nerror_model_weights: [1.5]\n";
+  const auto colours = [&](const std::string& extra, const std::string& out) {
+    const Result r = run("export --map " + map + " --color-octree " + out +
+                         " --mode uncertainty" + extra);
+    EXPECT_EQ(r.status, 0) << r.output;
+    std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(out));
+    auto* color = dynamic_cast<octomap::ColorOcTree*>(read.get());
+    std::set<std::array<uint8_t, 3>> seen;
+    if (color == nullptr) return seen;
+    for (auto it = color->begin_leafs(); it != color->end_leafs(); ++it) {
+      const octomap::ColorOcTreeNode::Color c = it->getColor();
+      if (c.r != 128 || c.g != 128 || c.b != 128) seen.insert({c.r, c.g, c.b});  // grey: none
+    }
+    return seen;
+  };
+  EXPECT_GT(colours("", out_ + "/plain_error.ot").size(), 10u);
+  EXPECT_EQ(colours(" --calibration " + file, out_ + "/calibrated_error.ot").size(), 1u);
 }
 
 // kill -9 during `export --color-octree` (before the fix 41 of 50 kills destroyed the previous
