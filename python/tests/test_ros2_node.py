@@ -137,6 +137,11 @@ def test_a_malformed_cloud_and_a_missing_transform_are_dropped_with_their_reason
     assert "field 'evidence' has count 2, expected C = 20 (num_classes); map unchanged" in log
 
 
+def test_network_evidence_without_a_calibration_file_gets_one_note(replayed, node):
+    log = (node[1] / "node.log").read_text()
+    assert log.count("the map's error probability is uncalibrated") == 1, log[-2000:]
+
+
 def test_save_map_writes_the_ot_and_the_bt(saved, replayed, client, node):
     tree = eo.load(saved / "run1.ot")
     assert tree.num_leaves == replayed["map"]["leaves"]
