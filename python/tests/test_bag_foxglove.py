@@ -49,6 +49,27 @@ def _varint(buf, i):
             return value, i
 
 
+def first_class_scene(port):
+    """The payload of the first /map/voxels/class message a Foxglove client (WebSocket,
+    foxglove.sdk.v1) gets from the server on `port`."""
+    async def receive():
+        async with websockets.connect(f"ws://127.0.0.1:{port}", max_size=None,
+                                      subprotocols=["foxglove.sdk.v1"]) as ws:
+            channels = {}
+            while "/map/voxels/class" not in channels:
+                msg = json.loads(await asyncio.wait_for(ws.recv(), 20))
+                if msg["op"] == "advertise":
+                    channels.update({c["topic"]: c["id"] for c in msg["channels"]})
+            await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                {"id": 3, "channelId": channels["/map/voxels/class"]}]}))
+            while True:
+                data = await asyncio.wait_for(ws.recv(), 20)
+                if isinstance(data, bytes) and data[0] == 1:
+                    return data[13:]
+
+    return asyncio.run(receive())
+
+
 def cubes_of(scene_update: bytes):
     """[(centre, size, rgba)] of every cube of every entity (SceneUpdate.entities = 2,
     SceneEntity.cubes = 8; CubePrimitive pose 1 / size 2 / color 3)."""
@@ -181,22 +202,7 @@ def test_the_command_line_serves_the_map_it_builds_to_a_foxglove_client(tmp_path
         assert line.startswith("foxglove: open ws://127.0.0.1:"), line
         port = int(line.split("ws://127.0.0.1:")[1].split()[0])
 
-        async def first_scene():
-            async with websockets.connect(f"ws://127.0.0.1:{port}", max_size=None,
-                                          subprotocols=["foxglove.sdk.v1"]) as ws:
-                channels = {}
-                while "/map/voxels/class" not in channels:
-                    msg = json.loads(await asyncio.wait_for(ws.recv(), 20))
-                    if msg["op"] == "advertise":
-                        channels.update({c["topic"]: c["id"] for c in msg["channels"]})
-                await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
-                    {"id": 3, "channelId": channels["/map/voxels/class"]}]}))
-                while True:
-                    data = await asyncio.wait_for(ws.recv(), 20)
-                    if isinstance(data, bytes) and data[0] == 1:
-                        return data[13:]
-
-        cubes = cubes_of(asyncio.run(first_scene()))
+        cubes = cubes_of(first_class_scene(port))
         # The served map is the one written, once the command has written it.
         for _ in range(100):
             if (tmp_path / "out" / "summary.json").is_file():

@@ -225,28 +225,11 @@ def test_a_query_answers_the_labels_of_the_map(saved, client):
 def test_foxglove_gets_the_live_map(saved, node):
     """foxglove_port: a Foxglove client (WebSocket, foxglove.sdk.v1) gets one cube per occupied
     leaf of the map the node saved."""
-    websockets = pytest.importorskip("websockets", reason="the test extra")
-    import asyncio
-    from test_bag_foxglove import cubes_of
+    pytest.importorskip("websockets", reason="the test extra")
+    from test_bag_foxglove import cubes_of, first_class_scene
     log = (node[1] / "node.log").read_text()
     port = int(log.split("foxglove: open ws://127.0.0.1:")[1].split()[0])
-
-    async def first_scene():
-        async with websockets.connect(f"ws://127.0.0.1:{port}", max_size=None,
-                                      subprotocols=["foxglove.sdk.v1"]) as ws:
-            channels = {}
-            while "/map/voxels/class" not in channels:
-                msg = json.loads(await asyncio.wait_for(ws.recv(), 20))
-                if msg["op"] == "advertise":
-                    channels.update({c["topic"]: c["id"] for c in msg["channels"]})
-            await ws.send(json.dumps({"op": "subscribe", "subscriptions": [
-                {"id": 3, "channelId": channels["/map/voxels/class"]}]}))
-            while True:
-                data = await asyncio.wait_for(ws.recv(), 20)
-                if isinstance(data, bytes) and data[0] == 1:
-                    return data[13:]
-
-    cubes = cubes_of(asyncio.run(first_scene()))
+    cubes = cubes_of(first_class_scene(port))
     assert len(cubes) == len(eo.load(saved / "run1.ot").leaves(occupied_only=True).sizes)
 
 
