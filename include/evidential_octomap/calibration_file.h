@@ -51,6 +51,13 @@ Calibration readCalibration(const std::string& path);
 // The file's text: `comment` (lines without '#', prefixed here) and the keys above.
 std::string calibrationText(const Calibration& calibration, const std::string& comment);
 
+// What a map of network evidence read without a calibration file says once (CLI, node).
+inline constexpr const char* kUncalibratedNote =
+    "the map's error probability is uncalibrated (1 - max p of the read-out): fit it on "
+    "labelled scans of this network with `evidential_octomap calibrate --data VALIDATION_DIR "
+    "--classes CLASSES.yaml --evidence file --out calibration.yaml` and read the file "
+    "(docs/calibration.md)";
+
 // Sets the tree's read-out cap and error model after checking problemWith (throws
 // std::runtime_error with its message).
 void applyCalibration(const Calibration& calibration, EvidentialOcTree* tree);

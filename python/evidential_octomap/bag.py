@@ -684,10 +684,7 @@ def note_if_uncalibrated(result: BagMap) -> None:
     network = any(not src.startswith(("label", "none")) for src in s["evidence_sources"])
     if result.tree.calibrated or derived or not network:
         return
-    print("note: the map's error probability is uncalibrated (1 - max p of the read-out); fit it "
-          "on labelled scans of this network with\n  evidential_octomap calibrate --data "
-          "VALIDATION_DIR --classes CLASSES.yaml --evidence file --out calibration.yaml\n"
-          "and pass --calibration calibration.yaml (docs/calibration.md)", file=sys.stderr)
+    print(f"note: {_core.UNCALIBRATED_NOTE} (--calibration FILE)", file=sys.stderr)
 
 
 def run_map(args) -> int:

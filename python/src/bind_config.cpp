@@ -63,6 +63,7 @@ void bindConfig(nb::module_& m) {
           },
           "The error model's terms ([] when the file has none).")
       .def_ro("source", &Calibration::source);
+  m.attr("UNCALIBRATED_NOTE") = kUncalibratedNote;
   m.def("read_calibration", &readCalibration, nb::arg("path"),
         "Reads a calibration file. Raises RuntimeError (naming the file and line) for an "
         "unreadable or invalid file.");

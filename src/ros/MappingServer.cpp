@@ -371,9 +371,7 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
   ++map_changes_;
   if (!(calibration_ && calibration_->error_model) && scan.source != "label" &&
       scan.source.rfind("none", 0) != 0) {
-    ROS_WARN_ONCE("the map's error probability is uncalibrated (1 - max p of the read-out): fit "
-                  "it on labelled scans of this network with `evidential_octomap calibrate` "
-                  "and load the file (docs/calibration.md)");
+    ROS_WARN_ONCE("%s (~calibration params: config:=calibration.yaml)", kUncalibratedNote);
   }
   const double ms = msSince(t0);
   const auto& t = pending.T_W_S.transform.translation;

@@ -79,11 +79,7 @@ void warnIfUncalibrated(const EvidenceOptions& evidence, bool calibrated) {
       evidence.source == EvidenceSource::kFile || evidence.source == EvidenceSource::kLearned;
   if (calibrated || !network || warned) return;
   warned = true;
-  std::cerr << "note: the map's error probability is uncalibrated (1 - max p of the read-out); "
-               "fit it on labelled scans of this network with\n  evidential_octomap calibrate "
-               "--data VALIDATION_DIR --classes CLASSES.yaml --evidence file --out "
-               "calibration.yaml\nand pass --calibration calibration.yaml "
-               "(docs/calibration.md)\n";
+  std::cerr << "note: " << kUncalibratedNote << " (map --calibration FILE)\n";
 }
 
 void addEvidenceOptions(CLI::App* cmd, EvidenceOptions* o, std::string* source_name) {

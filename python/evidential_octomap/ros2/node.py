@@ -272,10 +272,8 @@ class MappingNode(Node):
             return self._drop(REFUSED, msg, f"evidence refused: {e}; map unchanged")
         self.status.inserted_cloud(len(cloud.points), time.monotonic() - t0)
         if not self.tree.calibrated and not cloud.source.startswith(("label", "none")):
-            self.get_logger().warning(
-                "the map's error probability is uncalibrated (1 - max p of the read-out): fit "
-                "it on labelled scans of this network with `evidential_octomap calibrate` and "
-                "set calibration_file (docs/calibration.md)", once=True)
+            self.get_logger().warning(f"{_core.UNCALIBRATED_NOTE} (calibration_file)",
+                                      once=True)
         self.unsaved = True
         self.changed.set()
 
