@@ -10,7 +10,11 @@ revisited) with `_rate:=RATE` (RATE clouds a second, as long as the player keeps
 received is measured, from ~status). Every
 5 s the node's ~status goes to samples.csv; summary.json gives, after the first minute (steady
 state), the clouds received and inserted per second, the drops, the queue length and the insert
-times. Needs the sourced catkin workspace; outside CI (a measurement, not a test).
+times, and per stage (from the ~status sent after every insert): reading the cloud (reception
+thread), the insert's wait for the map lock, the insert, and the publish pass with the part of it
+that holds the map lock. `--views` subscribes to the markers and the voxel cloud as rviz does, so
+the views are built at ~publish_rate while the node maps. Needs the sourced catkin workspace;
+outside CI (a measurement, not a test).
 """
 import argparse
 import csv
@@ -29,6 +33,32 @@ _spec.loader.exec_module(soak_node)  # start_roscore(), stop()
 FIELDS = ["t_s", "clouds_received", "clouds_inserted", "clouds_dropped_queue",
           "clouds_dropped_invalid", "clouds_dropped_tf", "queue_length", "last_insert_ms",
           "mean_insert_ms", "map_leaves"]
+
+
+STAGES = ["last_read_ms", "last_lock_wait_ms", "last_insert_ms", "last_publish_ms",
+          "last_publish_lock_ms"]
+VIEW_TOPICS = ["/occupied_cells_vis_array", "/uncertainty_cells_vis_array", "/semantic_cloud"]
+
+
+def percentiles(values):
+    values = sorted(values)
+    if not values:
+        return {}
+    pick = lambda q: values[min(len(values) - 1, int(q * len(values)))]
+    return {"median": pick(0.5), "p95": pick(0.95), "max": values[-1], "n": len(values)}
+
+
+def stage_summary(inserts, t_from):
+    """Per stage over the inserts after t_from: each entry is one ~status after an insert."""
+    window = [i for i in inserts if i["t"] >= t_from]
+    out = {k: percentiles([i[k] for i in window]) for k in STAGES}
+    if window:
+        span = window[-1]["t"] - window[0]["t"]
+        busy = sum(i["last_lock_wait_ms"] + i["last_insert_ms"] for i in window[1:]) / 1e3
+        out["insertion_thread_busy_share"] = busy / span if span > 0 else None
+        out["max_lock_wait_ms"] = window[-1]["max_lock_wait_ms"]
+        out["max_publish_lock_ms"] = window[-1]["max_publish_lock_ms"]
+    return out
 
 
 def steady_summary(rows, warmup_s, rate):
@@ -70,9 +100,25 @@ def run(args):
                                        "__name:=player", "velodyne_points:=/velodyne_points"],
                                       stdout=log, stderr=subprocess.STDOUT))
         rospy.init_node("live_rate", disable_signals=True)
-        status = {}
-        rospy.Subscriber("/evidential_mapping_node/status", MappingStatus,
-                         lambda m: status.__setitem__("msg", m), queue_size=10)
+        status, inserts = {}, []
+
+        def on_status(m):
+            last = status.get("msg")
+            if last is not None and m.clouds_inserted > last.clouds_inserted:
+                entry = {k: getattr(m, k) for k in STAGES + ["max_lock_wait_ms",
+                                                             "max_publish_lock_ms"]}
+                entry["t"] = time.time()
+                inserts.append(entry)
+            status["msg"] = m
+
+        rospy.Subscriber("/evidential_mapping_node/status", MappingStatus, on_status,
+                         queue_size=50)
+        if args.views:
+            from sensor_msgs.msg import PointCloud2
+            from visualization_msgs.msg import MarkerArray
+            for topic in VIEW_TOPICS:
+                kind = PointCloud2 if topic.endswith("cloud") else MarkerArray
+                rospy.Subscriber(topic, kind, lambda m: None, queue_size=1)
         while "msg" not in status or status["msg"].clouds_received == 0:
             time.sleep(0.1)
         t0 = time.time()
@@ -90,6 +136,8 @@ def run(args):
                 writer.writerow(row)
                 f.flush()
         summary = steady_summary(rows, 60.0, args.rate)
+        summary["stages"] = stage_summary(inserts, t0 + 60.0)
+        summary["views_subscribed"] = bool(args.views)
         summary["load_average_start"] = load_start
         summary["minutes"] = args.minutes
         summary["max_range_m"] = args.max_range
@@ -105,6 +153,8 @@ def main():
     p.add_argument("--minutes", type=float, default=5.0)
     p.add_argument("--rate", type=float, default=20.0, help="the player's ~rate")
     p.add_argument("--out", default="build/live_rate")
+    p.add_argument("--views", action="store_true",
+                   help="subscribe to the markers and semantic_cloud as rviz does")
     p.add_argument("--max-range", type=float, default=50.0,
                    help="sensor_model/max_range [m] (< 0: unlimited, config/mapping.yaml's)")
     run(p.parse_args())

@@ -270,6 +270,19 @@ void MappingServer::cloudCallback(const sensor_msgs::PointCloud2ConstPtr& cloud)
     warnDropped(std::string("cloud dropped: ") + e.what() + "; map unchanged");
     return;
   }
+  // Read here, not on the insertion thread: the next insert does not wait for it.
+  const auto t_read = std::chrono::steady_clock::now();
+  CloudReadOptions options;
+  {
+    std::lock_guard<std::mutex> lock(options_mutex_);
+    options = read_options_;
+  }
+  const std::string error = fromPointCloud2(*cloud, options, &pending.scan);
+  pending.read_ms = msSince(t_read);
+  if (!error.empty()) {
+    dropInvalid(cloud->header.frame_id, error);
+    return;
+  }
   const std::optional<PendingCloud> dropped = clouds_->push(std::move(pending));
   uint64_t dropped_total = 0;
   double insert_ms = 0.0;
@@ -330,29 +343,41 @@ CloudReadOptions MappingServer::cloudReadOptions() const {
   return options;
 }
 
-void MappingServer::insertCloud(const PendingCloud& pending) {
-  const sensor_msgs::PointCloud2& cloud = *pending.cloud;
-  std::lock_guard<std::mutex> lock(mutex_);
-  const auto t_read = std::chrono::steady_clock::now();
-  SemanticCloud scan;
-  std::string error = fromPointCloud2(cloud, read_options_, &scan);
-  if (error.empty() && config_.use_camera) error = paintFromCamera(cloud, &scan);
-  if (error.empty() &&
-      keepHeightBand(toPose(pending.T_F_S.transform), config_.pointcloud_band, tree_->numClasses(),
-                     &scan) > 0 &&
+void MappingServer::dropInvalid(const std::string& frame_id, const std::string& error) {
+  {
+    std::lock_guard<std::mutex> status_lock(status_mutex_);
+    ++status_.clouds_dropped_invalid;
+  }
+  recordError("cloud dropped (frame " + frame_id + "): " + error);
+  warnDropped("cloud dropped (frame " + frame_id + "): " + error + "; map unchanged");
+}
+
+std::string MappingServer::prepareScan(PendingCloud& pending) {
+  SemanticCloud& scan = pending.scan;
+  if (config_.use_camera) {
+    const std::string error = paintFromCamera(*pending.cloud, &scan);
+    if (!error.empty()) return error;
+  }
+  if (keepHeightBand(toPose(pending.T_F_S.transform), config_.pointcloud_band,
+                     config_.num_classes, &scan) > 0 &&
       scan.points_S.size() == 0)
-    error = "no point within pointcloud_min_z .. pointcloud_max_z";
+    return "no point within pointcloud_min_z .. pointcloud_max_z";
+  return "";
+}
+
+void MappingServer::insertCloud(PendingCloud& pending) {
+  const sensor_msgs::PointCloud2& cloud = *pending.cloud;
+  const auto t_read = std::chrono::steady_clock::now();
+  const std::string error = prepareScan(pending);
   if (!error.empty()) {
-    {
-      std::lock_guard<std::mutex> status_lock(status_mutex_);
-      ++status_.clouds_dropped_invalid;
-    }
-    recordError("cloud dropped (frame " + cloud.header.frame_id + "): " + error);
-    warnDropped("cloud dropped (frame " + cloud.header.frame_id + "): " + error +
-                "; map unchanged");
+    dropInvalid(cloud.header.frame_id, error);
     return;
   }
-  const double read_ms = msSince(t_read);
+  const SemanticCloud& scan = pending.scan;
+  const double read_ms = pending.read_ms + msSince(t_read);
+  const auto t_wait = std::chrono::steady_clock::now();
+  std::unique_lock<std::mutex> lock(mutex_);
+  const double lock_wait_ms = msSince(t_wait);
   const auto t0 = std::chrono::steady_clock::now();
   InsertStats stats;
   try {
@@ -383,6 +408,9 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
     insert_ms_total_ += ms;
     status_.last_insert_ms = ms;
     status_.mean_insert_ms = insert_ms_total_ / double(scans);
+    status_.last_read_ms = read_ms;
+    status_.last_lock_wait_ms = lock_wait_ms;
+    status_.max_lock_wait_ms = std::max(status_.max_lock_wait_ms, lock_wait_ms);
     status_.last_points = static_cast<uint32_t>(stats.points_in);
     status_.local_map_tiles_on_disk = local_map_ ? uint32_t(local_map_->tilesOnDisk()) : 0;
     status_.local_map_tiles_written = local_map_ ? local_map_->tilesWritten() : 0;
@@ -397,6 +425,7 @@ void MappingServer::insertCloud(const PendingCloud& pending) {
       stats.ms_occupancy, stats.ms_kernel, stats.ms_update, tree_->numSemanticNodes(),
       clouds_->size());
   outputs_->markStale();
+  lock.unlock();
   if (config_.publish_rate <= 0.0) publishMap(false);
 }
 
@@ -446,8 +475,13 @@ std::string MappingServer::paintFromCamera(const sensor_msgs::PointCloud2& cloud
       projectToPixels(scan->points_S, R, cv::Vec3d(t.x, t.y, t.z), camera);
   octomap::Pointcloud painted;
   std::vector<float> evidence;
+  float label_magnitude = 0.0f;
+  {
+    std::lock_guard<std::mutex> lock(options_mutex_);
+    label_magnitude = read_options_.label_magnitude;
+  }
   std::string error = evidenceFromImage(scan->points_S, pixels, cv_image->image,
-                                        tree_->numClasses(), float(config_.label_evidence),
+                                        config_.num_classes, label_magnitude,
                                         config_.keep_outside_image, &painted, &evidence);
   if (!error.empty()) return error;
   if (painted.size() == 0) return "no point of the cloud lands in the evidence image";
@@ -467,15 +501,19 @@ void MappingServer::restartPublishTimer() {
   publish_timer_ = nh_.createTimer(ros::Duration(period), &MappingServer::publishTimer, this);
 }
 
-void MappingServer::publishTimer(const ros::TimerEvent&) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  publishMap(false);
-}
+void MappingServer::publishTimer(const ros::TimerEvent&) { publishMap(false); }
 
 void MappingServer::publishMap(bool force) {
+  std::lock_guard<std::mutex> pass(publish_mutex_);
   const auto t0 = std::chrono::steady_clock::now();
-  const std::string sent = outputs_->publish(*tree_, classes_, last_origin_W_, force);
+  octomap::point3d origin_W;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    origin_W = last_origin_W_;
+  }
+  const std::string sent = outputs_->publish(classes_, origin_W, force);
   if (sent.empty()) return;
+  const double hold_ms = outputs_->longestHoldMs();
   uint64_t scans = 0;
   double mean_ms = 0.0;
   {
@@ -484,11 +522,14 @@ void MappingServer::publishMap(bool force) {
     mean_ms = status_.mean_insert_ms;
     status_.last_publish_ms = msSince(t0);
     status_.max_publish_ms = std::max(status_.max_publish_ms, status_.last_publish_ms);
+    status_.last_publish_lock_ms = hold_ms;
+    status_.max_publish_lock_ms = std::max(status_.max_publish_lock_ms, hold_ms);
     status_.last_views_ms = outputs_->lastViewsMs();
     status_.last_full_maps_ms = outputs_->lastMapsMs();
   }
-  ROS_INFO("published%s in %.0f ms (mean insert %.0f ms over %llu scans)", sent.c_str(),
-           msSince(t0), mean_ms, static_cast<unsigned long long>(scans));
+  ROS_INFO("published%s in %.0f ms, map lock held at most %.0f ms at a time (mean insert %.0f ms "
+           "over %llu scans)",
+           sent.c_str(), msSince(t0), hold_ms, mean_ms, static_cast<unsigned long long>(scans));
 }
 
 void MappingServer::recordMapSizeAfterInsert() {
@@ -656,19 +697,27 @@ bool MappingServer::loadMap(LoadMap::Request& req, LoadMap::Response& res) {
     ROS_ERROR("load_map: %s (map unchanged)", e.what());
     return true;
   }
-  std::lock_guard<std::mutex> lock(mutex_);
-  adoptMap(std::move(loaded), occupancy_only);
-  ++map_changes_;
-  res.success = true;
-  res.message = "loaded " + std::to_string(tree_->getNumLeafNodes()) + " leaves from " + path;
-  ROS_INFO("load_map: %s", res.message.c_str());
-  recordMapSize();
-  outputs_->markStale();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    adoptMap(std::move(loaded), occupancy_only);
+    ++map_changes_;
+    res.success = true;
+    res.message = "loaded " + std::to_string(tree_->getNumLeafNodes()) + " leaves from " + path;
+    ROS_INFO("load_map: %s", res.message.c_str());
+    recordMapSize();
+    outputs_->markStale();
+  }
   publishMap(false);
   return true;
 }
 
 bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  resetMap();
+  publishMap(true);
+  return true;
+}
+
+void MappingServer::resetMap() {
   std::lock_guard<std::mutex> lock(mutex_);
   // Run-time (dynamic_reconfigure) values stay; ~rule and ~sbki_prior, which change what a
   // stored voxel means and so cannot change on a live map, are re-read here.
@@ -689,22 +738,23 @@ bool MappingServer::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
            tree_->getResolution());
   recordMapSize();
   outputs_->markStale();
-  publishMap(true);
-  return true;
 }
 
 bool MappingServer::clearBox(ClearBbx::Request& req, ClearBbx::Response& res) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  clearBoxRequest(tree_.get(), req, &res);
-  if (!res.success) {
-    ROS_ERROR("clear_bbx: %s; map unchanged", res.message.c_str());
-    return true;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    clearBoxRequest(tree_.get(), req, &res);
+    if (!res.success) {
+      ROS_ERROR("clear_bbx: %s; map unchanged", res.message.c_str());
+      return true;
+    }
+    ++map_changes_;
+    ROS_INFO("clear_bbx: %u leaves cleared in [%.2f %.2f %.2f] .. [%.2f %.2f %.2f]",
+             res.voxels_cleared, req.min.x, req.min.y, req.min.z, req.max.x, req.max.y,
+             req.max.z);
+    recordMapSize();
+    outputs_->markStale();
   }
-  ++map_changes_;
-  ROS_INFO("clear_bbx: %u leaves cleared in [%.2f %.2f %.2f] .. [%.2f %.2f %.2f]",
-           res.voxels_cleared, req.min.x, req.min.y, req.min.z, req.max.x, req.max.y, req.max.z);
-  recordMapSize();
-  outputs_->markStale();
   publishMap(true);
   return true;
 }
@@ -1000,7 +1050,10 @@ void MappingServer::reconfigure(MappingConfig& rc, uint32_t) {
   tree_->setSensorModel(model);
   ++map_changes_;
   config_.label_evidence = node.label_evidence;
-  read_options_.label_magnitude = static_cast<float>(node.label_evidence);
+  {
+    std::lock_guard<std::mutex> options_lock(options_mutex_);
+    read_options_.label_magnitude = static_cast<float>(node.label_evidence);
+  }
   if (node.publish_rate != config_.publish_rate) {
     config_.publish_rate = node.publish_rate;
     restartPublishTimer();

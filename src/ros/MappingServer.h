@@ -3,11 +3,14 @@
 // maths lives in the core library.
 //
 // Threads: clouds (and camera images) are received on their own callback queue and spinner,
-// which only looks up the transform and puts the cloud in a bounded queue of the newest clouds;
-// one insertion thread takes clouds from that queue and fuses them into the map. A slow insert
-// therefore never blocks reception, and every cloud that cannot be mapped is counted, warned
-// (throttled) and reported on ~status and /diagnostics. Services and the publish timers run on
-// the node's own callback queue; the map mutex serialises them with the insertion thread.
+// which looks up the transform, reads the cloud's points and evidence and puts the result in a
+// bounded queue of the newest clouds; one insertion thread takes clouds from that queue and
+// fuses them into the map. A slow insert therefore never blocks reception, reading a cloud never
+// delays an insert, and every cloud that cannot be mapped is counted, warned (throttled) and
+// reported on ~status and /diagnostics. Services and the publish timers run on the node's own
+// callback queue; the map mutex serialises them with the insertion thread. A publish pass holds
+// the map lock only to read the map (voxel views, whole-map messages); markers are built and
+// messages serialised and sent after it is released.
 #pragma once
 
 #include <dynamic_reconfigure/server.h>
@@ -62,6 +65,8 @@ class MappingServer {
   // A received cloud with its sensor pose, waiting for the insertion thread.
   struct PendingCloud {
     sensor_msgs::PointCloud2ConstPtr cloud;
+    SemanticCloud scan;    // read on the reception thread
+    double read_ms = 0.0;  // how long reading took
     geometry_msgs::TransformStamped T_W_S;
     geometry_msgs::TransformStamped T_F_S;  // into the frame of pointcloud_min_z/max_z
   };
@@ -76,14 +81,18 @@ class MappingServer {
 
   // --- insertion thread -----------------------------------------------------------------
   void insertionLoop();
-  void insertCloud(const PendingCloud& pending);
+  void insertCloud(PendingCloud& pending);
+  // Camera evidence and the height band, outside the map lock; "" or why the cloud is dropped.
+  std::string prepareScan(PendingCloud& pending);
+  void dropInvalid(const std::string& frame_id, const std::string& error);
   // Replaces the cloud's evidence by the camera's; "" or why the scan cannot be painted.
   std::string paintFromCamera(const sensor_msgs::PointCloud2& cloud, SemanticCloud* scan);
 
   // --- output ---------------------------------------------------------------------------
   void publishTimer(const ros::TimerEvent&);
   void statusTimer(const ros::TimerEvent&);
-  // Publishes the stale outputs that have subscribers (all with `force`); map mutex held.
+  // Publishes the stale outputs that have subscribers (all with `force`). Takes the map mutex
+  // to read the map, so callers must not hold it; passes are serialised by publish_mutex_.
   void publishMap(bool force);
   void publishStatus();
   void restartPublishTimer();
@@ -92,6 +101,7 @@ class MappingServer {
   bool saveMap(SaveMap::Request& req, SaveMap::Response& res);
   bool loadMap(LoadMap::Request& req, LoadMap::Response& res);
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
+  void resetMap();  // a fresh tree with the run-time settings (takes the map mutex)
   bool clearBox(ClearBbx::Request& req, ClearBbx::Response& res);
   bool clearBbx(BoundingBoxQuery::Request& req, BoundingBoxQuery::Response& res);
   bool query(QueryMap::Request& req, QueryMap::Response& res);
@@ -150,11 +160,13 @@ class MappingServer {
   NodeConfig config_;
   ClassTable classes_;
   std::shared_ptr<const Calibration> calibration_;  // ~calibration_* params; null: none
-  CloudReadOptions read_options_;
+  CloudReadOptions read_options_;  // under options_mutex_ (read on the reception thread)
+  std::mutex options_mutex_;
   std::unique_ptr<EvidentialOcTree> tree_;
   std::unique_ptr<LocalMap> local_map_;  // over tree_, with ~local_map/radius > 0
   size_t local_maps_started_ = 0;
   std::mutex mutex_;  // map, config and outputs: insertion thread, services, timers
+  std::mutex publish_mutex_;  // one publish pass at a time; taken before mutex_, never after
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;

@@ -444,50 +444,20 @@ std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudRead
   return out->points_S.size() > 0 ? "" : noFinitePoints(out->nonfinite_points);
 }
 
-namespace {
-
-// Leaves that are occupied (or free), inside `box` unless it is empty, centre in `band`.
-std::vector<VoxelView> collectLeaves(const EvidentialOcTree& tree, const Box& box,
-                                     const HeightBand& band, bool occupied) {
-  std::vector<VoxelView> voxels;
-  auto add = [&](const EvidentialOcTreeNode& node, const octomap::point3d& center, double size,
-                 unsigned depth) {
-    if (tree.isNodeOccupied(node) != occupied || !band.contains(center.z())) return;
-    VoxelView v;
-    v.center = center;
-    v.size = size;
-    v.depth = depth;
-    if (occupied && node.hasSemantics()) {
-      const VoxelOpinion o = tree.opinion(&node);
-      v.label = o.label;
-      v.uncertainty = o.uncertainty;
-      v.error_probability = tree.rule().errorProbability(o);
-      v.conflict = o.conflict;
-    }
-    voxels.push_back(v);
-  };
-  if (tree.getRoot() == nullptr) return voxels;
-  if (box.empty()) {
-    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it)
-      add(*it, it.getCoordinate(), it.getSize(), it.getDepth());
-  } else {
-    for (auto it = tree.begin_leafs_bbx(box.min, box.max), end = tree.end_leafs_bbx(); it != end;
-         ++it)
-      add(*it, it.getCoordinate(), it.getSize(), it.getDepth());
+VoxelView viewOfLeaf(const EvidentialOcTree& tree, const EvidentialOcTreeNode& node,
+                     const octomap::point3d& center, double size, unsigned depth) {
+  VoxelView v;
+  v.center = center;
+  v.size = size;
+  v.depth = depth;
+  if (node.hasSemantics() && tree.isNodeOccupied(node)) {
+    const VoxelOpinion o = tree.opinion(&node);
+    v.label = o.label;
+    v.uncertainty = o.uncertainty;
+    v.error_probability = tree.rule().errorProbability(o);
+    v.conflict = o.conflict;
   }
-  return voxels;
-}
-
-}  // namespace
-
-std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& box,
-                                      const HeightBand& band) {
-  return collectLeaves(tree, box, band, true);
-}
-
-std::vector<VoxelView> freeVoxels(const EvidentialOcTree& tree, const Box& box,
-                                  const HeightBand& band) {
-  return collectLeaves(tree, box, band, false);
+  return v;
 }
 
 size_t keepHeightBand(const octomap::pose6d& T_F_S, const HeightBand& band, int num_classes,

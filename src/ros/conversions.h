@@ -88,12 +88,9 @@ struct HeightBand {
   bool unbounded() const { return std::isinf(min_z) && std::isinf(max_z); }
 };
 
-// Every occupied (free) leaf of `tree` inside `box` (unless the box is empty) whose centre lies
-// in `band`; free leaves carry no semantics.
-std::vector<VoxelView> occupiedVoxels(const EvidentialOcTree& tree, const Box& box = Box(),
-                                      const HeightBand& band = HeightBand());
-std::vector<VoxelView> freeVoxels(const EvidentialOcTree& tree, const Box& box = Box(),
-                                  const HeightBand& band = HeightBand());
+// The view of one leaf; an occupied leaf with semantics carries its opinion, a free one none.
+VoxelView viewOfLeaf(const EvidentialOcTree& tree, const EvidentialOcTreeNode& node,
+                     const octomap::point3d& center, double size, unsigned depth);
 
 // Keeps the points of `scan` whose height in frame F lies in `band`, with their evidence rows;
 // T_F_S maps the cloud's frame into F. Returns how many points were removed.

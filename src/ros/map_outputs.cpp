@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <memory>
 
 #include "conversions.h"
 #include "legend.h"
@@ -32,7 +33,16 @@ void stamp(Message* message, const ros::Time& time) {
 template <typename Message>
 void stampAndSend(StaleOutput* output, Message message, const ros::Time& time) {
   stamp(&message, time);
-  output->send(message);
+  output->publisher.publish(message);
+}
+
+// Stamps a message built under the map lock and leaves its send in the outbox.
+template <typename Message>
+void sendLater(StaleOutput* output, Message message, const ros::Time& time, Outbox* outbox) {
+  stamp(&message, time);
+  auto shared = std::make_shared<Message>(std::move(message));
+  output->claim();
+  outbox->push_back([output, shared] { output->publisher.publish(*shared); });
 }
 
 std::string uncertaintyName(const EvidentialOcTree& tree, UncertaintyView view) {
@@ -44,7 +54,7 @@ std::string uncertaintyName(const EvidentialOcTree& tree, UncertaintyView view) 
 
 MapOutputs::MapOutputs(ros::NodeHandle& nh, ros::NodeHandle& pnh, const NodeConfig& config,
                        const ClassTable& classes, OctomapMsgsInterface::WithMap with_map)
-    : config_(config) {
+    : config_(config), with_map_(with_map) {
   const bool latch = config_.latch;
   using visualization_msgs::MarkerArray;
   semantic_markers_.publisher = nh.advertise<MarkerArray>("occupied_cells_vis_array", 1, latch);
@@ -78,17 +88,34 @@ void MapOutputs::markStale() {
   if (octomap_msgs_) octomap_msgs_->markStale();
 }
 
-std::string MapOutputs::publish(const EvidentialOcTree& tree, const ClassTable& classes,
-                                const octomap::point3d& origin_W, bool force) {
+template <typename Visit>
+void MapOutputs::hold(Visit visit) {
+  with_map_([&](const EvidentialOcTree& tree, const ClassTable&) {
+    const auto t0 = std::chrono::steady_clock::now();
+    visit(tree);
+    longest_hold_ms_ = std::max(longest_hold_ms_, msSince(t0));
+  });
+}
+
+std::string MapOutputs::publish(const ClassTable& classes, const octomap::point3d& origin_W,
+                                bool force) {
+  longest_hold_ms_ = 0.0;
+  ViewPlan plan;
+  hold([&](const EvidentialOcTree& tree) { plan = planViews(tree, origin_W, force); });
   // Until the uncertainty view is built, the legend shows the configured range, not yet fitted.
   if (!legend_sent_)
     publishLegend(classes, resolveRange({}, config_.uncertainty_range, config_.uncertainty_view),
-                  uncertaintyName(tree, config_.uncertainty_view));
-  std::string sent = publishViews(tree, classes, origin_W, force);
+                  plan.uncertainty_name);
+  std::string sent = readAndSendViews(plan, classes);
   if (!wholeMapsDue(force)) return sent;  // still stale: sent once the period has passed
   const auto t0 = std::chrono::steady_clock::now();
-  std::string maps = publishMaps(tree, classes, force);
-  if (octomap_msgs_) maps += octomap_msgs_->publish(tree, classes, force);
+  Outbox outbox;
+  std::string maps;
+  hold([&](const EvidentialOcTree& tree) {
+    maps = publishMaps(tree, force, &outbox);
+    if (octomap_msgs_) maps += octomap_msgs_->publish(tree, classes, force, &outbox);
+  });
+  for (const auto& send : outbox) send();  // serialised and sent outside the map lock
   if (!maps.empty()) {
     last_maps_sent_ = ros::WallTime::now();
     last_maps_ms_ = msSince(t0);
@@ -101,15 +128,20 @@ bool MapOutputs::wholeMapsDue(bool force) const {
   return (ros::WallTime::now() - last_maps_sent_).toSec() >= config_.full_map_period;
 }
 
-std::string MapOutputs::publishViews(const EvidentialOcTree& tree, const ClassTable& classes,
-                                     const octomap::point3d& origin_W, bool force) {
-  const bool occupied = semantic_markers_.wanted(force) || uncertainty_markers_.wanted(force) ||
-                        conflict_markers_.wanted(force) || voxel_cloud_.wanted(force) ||
-                        voxel_centers_.wanted(force);
-  const bool free = free_markers_.wanted(force);
-  if (!occupied && !free) return "";
-  const auto t0 = std::chrono::steady_clock::now();
-  const ros::Time now = ros::Time::now();
+// Map lock held: which views are due (claimed now, so an insert from here on marks them stale
+// again) and the chunks to read them from.
+MapOutputs::ViewPlan MapOutputs::planViews(const EvidentialOcTree& tree,
+                                           const octomap::point3d& origin_W, bool force) {
+  ViewPlan plan;
+  plan.uncertainty_name = uncertaintyName(tree, config_.uncertainty_view);
+  for (StaleOutput* o : {&semantic_markers_, &uncertainty_markers_, &conflict_markers_,
+                         &voxel_cloud_, &voxel_centers_, &free_markers_}) {
+    if (!o->wanted(force)) continue;
+    o->claim();
+    plan.due.push_back(o);
+    (o == &free_markers_ ? plan.free : plan.occupied) = true;
+  }
+  if (plan.due.empty()) return plan;
   Box box;
   if (config_.publish_radius > 0.0) {
     const octomap::point3d r(config_.publish_radius, config_.publish_radius,
@@ -117,42 +149,49 @@ std::string MapOutputs::publishViews(const EvidentialOcTree& tree, const ClassTa
     box.min = origin_W - r;
     box.max = origin_W + r;
   }
-  const unsigned depth = tree.getTreeDepth();
+  plan.chunks = viewChunks(tree, box);
+  plan.depth = tree.getTreeDepth();
+  plan.stamp = ros::Time::now();
+  return plan;
+}
+
+std::string MapOutputs::readAndSendViews(const ViewPlan& plan, const ClassTable& classes) {
+  if (plan.due.empty()) return "";
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<VoxelView> occupied, free;
+  for (const ViewChunk& chunk : plan.chunks)  // one short hold per chunk
+    hold([&](const EvidentialOcTree& tree) {
+      readChunk(tree, chunk, config_.occupancy_band, plan.occupied ? &occupied : nullptr,
+                plan.free ? &free : nullptr);
+    });
+  const bool due_uncertainty = plan.isDue(&uncertainty_markers_);
   const std::string& frame = config_.frame_id;
-  size_t n_occupied = 0, n_free = 0;
-  if (occupied) {
-    const std::vector<VoxelView> voxels = occupiedVoxels(tree, box, config_.occupancy_band);
-    n_occupied = voxels.size();
-    if (semantic_markers_.wanted(force))
-      stampAndSend(&semantic_markers_, semanticMarkers(voxels, classes, frame, depth), now);
-    if (uncertainty_markers_.wanted(force)) {
-      const UncertaintyView view = config_.uncertainty_view;
-      const UncertaintyRange range = resolveRange(voxels, config_.uncertainty_range, view);
-      stampAndSend(&uncertainty_markers_, uncertaintyMarkers(voxels, range, view, frame, depth),
-                   now);
-      publishLegend(classes, range, uncertaintyName(tree, view));
-    }
-    if (conflict_markers_.wanted(force))
-      stampAndSend(&conflict_markers_, conflictMarkers(voxels, frame, depth), now);
-    if (voxel_cloud_.wanted(force) || voxel_centers_.wanted(force)) {
-      const sensor_msgs::PointCloud2 cloud = toPointCloud2(voxels, classes, frame);
-      if (voxel_cloud_.wanted(force)) stampAndSend(&voxel_cloud_, cloud, now);
-      if (voxel_centers_.wanted(force)) stampAndSend(&voxel_centers_, cloud, now);
-    }
+  if (plan.isDue(&semantic_markers_))
+    stampAndSend(&semantic_markers_, semanticMarkers(occupied, classes, frame, plan.depth),
+                 plan.stamp);
+  if (due_uncertainty) {
+    const UncertaintyView view = config_.uncertainty_view;
+    const UncertaintyRange range = resolveRange(occupied, config_.uncertainty_range, view);
+    stampAndSend(&uncertainty_markers_, uncertaintyMarkers(occupied, range, view, frame, plan.depth),
+                 plan.stamp);
+    publishLegend(classes, range, plan.uncertainty_name);
   }
-  if (free) {
-    const std::vector<VoxelView> voxels = freeVoxels(tree, box, config_.occupancy_band);
-    n_free = voxels.size();
-    stampAndSend(&free_markers_, freeMarkers(voxels, frame, depth), now);
+  if (plan.isDue(&conflict_markers_))
+    stampAndSend(&conflict_markers_, conflictMarkers(occupied, frame, plan.depth), plan.stamp);
+  if (plan.isDue(&voxel_cloud_) || plan.isDue(&voxel_centers_)) {
+    const sensor_msgs::PointCloud2 cloud = toPointCloud2(occupied, classes, frame);
+    if (plan.isDue(&voxel_cloud_)) stampAndSend(&voxel_cloud_, cloud, plan.stamp);
+    if (plan.isDue(&voxel_centers_)) stampAndSend(&voxel_centers_, cloud, plan.stamp);
   }
+  if (plan.free) stampAndSend(&free_markers_, freeMarkers(free, frame, plan.depth), plan.stamp);
   last_views_ms_ = msSince(t0);
-  char part[96];
-  std::snprintf(part, sizeof(part), " views of %zu occupied + %zu free voxels (%.0f ms)",
-                n_occupied, n_free, last_views_ms_);
+  char part[128];
+  std::snprintf(part, sizeof(part), " views of %zu occupied + %zu free voxels (%.0f ms, %zu chunks)",
+                occupied.size(), free.size(), last_views_ms_, plan.chunks.size());
   return part;
 }
 
-std::string MapOutputs::publishMaps(const EvidentialOcTree& tree, const ClassTable&, bool force) {
+std::string MapOutputs::publishMaps(const EvidentialOcTree& tree, bool force, Outbox* outbox) {
   const ros::Time now = ros::Time::now();
   const std::string& frame = config_.frame_id;
   std::string sent;
@@ -161,7 +200,7 @@ std::string MapOutputs::publishMaps(const EvidentialOcTree& tree, const ClassTab
     const auto t = std::chrono::steady_clock::now();
     EvidentialMap msg = toEvidentialMap(tree, frame);
     const double mb = msg.data.size() / 1e6;
-    stampAndSend(&evidential_map_, std::move(msg), now);
+    sendLater(&evidential_map_, std::move(msg), now, outbox);
     std::snprintf(part, sizeof(part), " evidential_map (%.1f MB, %.0f ms)", mb, msSince(t));
     sent += part;
   }
@@ -173,17 +212,18 @@ std::string MapOutputs::publishMaps(const EvidentialOcTree& tree, const ClassTab
   };
   if (occupancy_map_.wanted(force))
     timed("occupancy_map",
-          [&] { stampAndSend(&occupancy_map_, toOccupancyMap(tree, frame), now); });
+          [&] { sendLater(&occupancy_map_, toOccupancyMap(tree, frame), now, outbox); });
   if (projected_map_.wanted(force))
     timed("projected_map", [&] {
-      stampAndSend(&projected_map_, projectOccupancy(tree, config_.occupancy_band, frame), now);
+      sendLater(&projected_map_, projectOccupancy(tree, config_.occupancy_band, frame), now,
+                outbox);
     });
   if (!class_costs_.empty() && projected_cost_map_.wanted(force))
     timed("projected_cost_map", [&] {
-      stampAndSend(&projected_cost_map_,
-                   projectClassCosts(tree, config_.occupancy_band, class_costs_,
-                                     static_cast<int8_t>(config_.class_cost_default), frame),
-                   now);
+      sendLater(&projected_cost_map_,
+                projectClassCosts(tree, config_.occupancy_band, class_costs_,
+                                  static_cast<int8_t>(config_.class_cost_default), frame),
+                now, outbox);
     });
   return sent;
 }

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <memory>
 
 #include "octomap_msgs_conversions.h"
 #include "stale_output.h"
@@ -28,20 +29,22 @@ class OctomapMsgsOutputs : public OctomapMsgsInterface {
 
   void markStale() override { binary_.stale = full_.stale = evidential_.stale = true; }
 
-  std::string publish(const EvidentialOcTree& tree, const ClassTable& classes,
-                      bool force) override {
+  std::string publish(const EvidentialOcTree& tree, const ClassTable& classes, bool force,
+                      Outbox* outbox) override {
     std::string sent;
     const ros::Time now = ros::Time::now();
-    // Builds (timed) and sends one message.
+    // Builds (timed, under the map lock) one message; it is sent from the outbox.
     auto send = [&](StaleOutput* output, const char* name, auto build) {
       const auto t0 = std::chrono::steady_clock::now();
-      octomap_msgs::Octomap msg = build();
-      msg.header.stamp = now;
-      output->send(msg);
+      auto msg = std::make_shared<octomap_msgs::Octomap>(build());
+      msg->header.stamp = now;
+      output->claim();
+      outbox->push_back([output, msg] { output->publisher.publish(*msg); });
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       char part[80];
-      std::snprintf(part, sizeof(part), " %s (%.1f MB, %.0f ms)", name, msg.data.size() / 1e6, ms);
+      std::snprintf(part, sizeof(part), " %s (%.1f MB, %.0f ms)", name, msg->data.size() / 1e6,
+                    ms);
       sent += part;
     };
     const std::string& frame = config_.frame_id;

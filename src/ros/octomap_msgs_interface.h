@@ -14,6 +14,7 @@
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "ros_params.h"
+#include "stale_output.h"
 
 namespace evidential_octomap {
 
@@ -31,11 +32,12 @@ class OctomapMsgsInterface {
                                                       WithMap with_map);
   virtual ~OctomapMsgsInterface() = default;
 
-  // As MapOutputs: mark every topic older than the map; publish the stale ones with subscribers
-  // (all with `force`) and return an account for the log.
+  // As MapOutputs: mark every topic older than the map; build the stale ones with subscribers
+  // (all with `force`; map lock held), leave their sends in `outbox`, and return an account for
+  // the log.
   virtual void markStale() = 0;
-  virtual std::string publish(const EvidentialOcTree& tree, const ClassTable& classes,
-                              bool force) = 0;
+  virtual std::string publish(const EvidentialOcTree& tree, const ClassTable& classes, bool force,
+                              Outbox* outbox) = 0;
 };
 
 }  // namespace evidential_octomap

@@ -4,8 +4,10 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -13,6 +15,7 @@
 #include <octomap/OcTree.h>
 
 #include "conversions.h"
+#include "view_chunks.h"
 #include "evidential_octomap/io.h"
 #include "visualization.h"
 
@@ -704,6 +707,111 @@ TEST(LeafViews, HeightBandKeepsLeavesWhoseCentreIsInside) {
   ASSERT_GT(above.size(), 10u);
   for (const auto& v : above) EXPECT_GE(v.center.z(), 0.0);
   EXPECT_LT(above.size(), occupiedVoxels(*tree).size());
+}
+
+// A map wider than many view chunks (12.8 m at 0.2 m): walls 30 m either side of the sensor,
+// so the free space between them is pruned into leaves larger than a chunk.
+std::unique_ptr<EvidentialOcTree> wideMap() {
+  auto tree = std::make_unique<EvidentialOcTree>(0.2, kC);
+  octomap::Pointcloud points;
+  std::vector<float> evidence;
+  for (float x : {-30.05f, 30.05f})
+    for (float y = -20.f; y <= 20.f; y += 0.15f)
+      for (float z = -1.f; z <= 1.f; z += 0.15f) {
+        points.push_back(x, y, z);
+        for (int c = 0; c < kC; ++c) evidence.push_back(c == (x > 0 ? 1 : 2) ? 30.f : 0.f);
+      }
+  tree->insertSemanticScan(points, evidence, octomap::point3d(0, 0, 0));
+  return tree;
+}
+
+// Sets every voxel of the 25.6 m cube at the key origin free, so it is pruned into one leaf of
+// depth kChunkDepth - 1: larger than a chunk. `by_chunk`: its eight chunks alternate between two
+// free values, so each is one leaf of depth kChunkDepth and the cube is not pruned further.
+void fillFreeCube(EvidentialOcTree* tree, bool by_chunk = false) {
+  const octomap::OcTreeKey origin = tree->coordToKey(octomap::point3d(0.1f, 0.1f, 0.1f));
+  const unsigned chunk = 1u << (tree->getTreeDepth() - kChunkDepth), edge = 2 * chunk;
+  const float free_value = tree->getClampingThresMinLog();
+  octomap::OcTreeKey k;
+  for (unsigned x = 0; x < edge; ++x)
+    for (unsigned y = 0; y < edge; ++y)
+      for (unsigned z = 0; z < edge; ++z) {
+        k[0] = uint16_t(origin[0] + x), k[1] = uint16_t(origin[1] + y);
+        k[2] = uint16_t(origin[2] + z);
+        const bool odd = by_chunk && ((x / chunk + y / chunk + z / chunk) & 1);
+        tree->setNodeValue(k, odd ? free_value / 2 : free_value, true);
+      }
+  tree->prune();
+}
+
+using LeafId = std::tuple<uint16_t, uint16_t, uint16_t, unsigned>;
+
+std::multiset<LeafId> leafIds(const EvidentialOcTree& tree, const std::vector<VoxelView>& views) {
+  std::multiset<LeafId> ids;
+  for (const auto& v : views) {
+    const octomap::OcTreeKey k = tree.coordToKey(v.center, v.depth);
+    ids.emplace(k[0], k[1], k[2], v.depth);
+  }
+  return ids;
+}
+
+TEST(ViewChunks, ChunksReadEveryLeafOnceAsOneWalkOverTheTree) {
+  auto tree = wideMap();
+  fillFreeCube(tree.get());
+  std::vector<VoxelView> walked_occupied, walked_free;  // the reference: one walk, no chunks
+  size_t pruned_larger_than_a_chunk = 0;
+  for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
+    VoxelView v;
+    v.center = it.getCoordinate();
+    v.depth = it.getDepth();
+    (tree->isNodeOccupied(*it) ? walked_occupied : walked_free).push_back(v);
+    if (it.getDepth() < kChunkDepth) ++pruned_larger_than_a_chunk;
+  }
+  ASSERT_GT(pruned_larger_than_a_chunk, 0u);
+  const auto chunks = viewChunks(*tree, Box());
+  ASSERT_GT(chunks.size(), 8u);
+  std::vector<VoxelView> occupied, free;
+  for (const auto& chunk : chunks) readChunk(*tree, chunk, HeightBand(), &occupied, &free);
+  EXPECT_EQ(leafIds(*tree, occupied), leafIds(*tree, walked_occupied));
+  EXPECT_EQ(leafIds(*tree, free), leafIds(*tree, walked_free));
+  size_t labelled = 0;
+  for (const auto& v : occupied) labelled += v.label >= 0;
+  EXPECT_GT(labelled, occupied.size() / 2);
+}
+
+TEST(ViewChunks, ALeafPrunedAcrossChunksAfterTheyWereListedIsReadOnce) {
+  auto tree = wideMap();
+  fillFreeCube(tree.get(), true);
+  const auto chunks = viewChunks(*tree, Box());
+  // Between the listing and the reads the map changes: the cube's eight listed chunks become
+  // one pruned leaf that each of them overlaps.
+  fillFreeCube(tree.get());
+  std::vector<VoxelView> occupied, free;
+  for (const auto& chunk : chunks) readChunk(*tree, chunk, HeightBand(), &occupied, &free);
+  size_t big = 0;
+  for (const auto& v : free) big += v.depth == kChunkDepth - 1;
+  EXPECT_EQ(big, 1u);
+  const auto ids = leafIds(*tree, free);
+  for (const auto& id : ids) EXPECT_EQ(ids.count(id), 1u);
+}
+
+TEST(ViewChunks, ABoxReadsTheLeavesWhoseKeysLieInIt) {
+  auto tree = wideMap();
+  Box box;
+  box.min = octomap::point3d(25.f, -5.f, -2.f);
+  box.max = octomap::point3d(35.f, 5.f, 2.f);
+  const auto some = occupiedVoxels(*tree, box);
+  ASSERT_FALSE(some.empty());
+  const octomap::OcTreeKey lo = tree->coordToKey(box.min), hi = tree->coordToKey(box.max);
+  size_t expected = 0;
+  for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
+    const octomap::OcTreeKey k = it.getKey();
+    bool inside = tree->isNodeOccupied(*it);
+    for (int i = 0; i < 3; ++i) inside = inside && k[i] >= lo[i] && k[i] <= hi[i];
+    expected += inside;
+  }
+  EXPECT_EQ(some.size(), expected);
+  for (const auto& v : some) EXPECT_GT(v.center.x(), 24.f);
 }
 
 TEST(KeepHeightBand, KeepsPointsInsideTheBandInTheGivenFrameWithTheirEvidence) {
