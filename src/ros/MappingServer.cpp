@@ -106,8 +106,7 @@ MappingServer::MappingServer(const ros::NodeHandle& nh, const ros::NodeHandle& n
 
   outputs_ = std::make_unique<MapOutputs>(nh_, pnh_, config_, classes_,
                                           [this](const OctomapMsgsInterface::MapVisitor& visit) {
-                                            std::lock_guard<std::mutex> lock(mutex_);
-                                            visit(*tree_, classes_);
+                                            readMap(visit);
                                           });
   status_pub_ = pnh_.advertise<MappingStatus>("status", 1, true);
   diagnostics_pub_ = nh_.advertise<diagnostic_msgs::DiagnosticArray>("/diagnostics", 1);
@@ -376,7 +375,9 @@ void MappingServer::insertCloud(PendingCloud& pending) {
   const SemanticCloud& scan = pending.scan;
   const double read_ms = pending.read_ms + msSince(t_read);
   const auto t_wait = std::chrono::steady_clock::now();
+  ++inserts_waiting_;
   std::unique_lock<std::mutex> lock(mutex_);
+  --inserts_waiting_;
   const double lock_wait_ms = msSince(t_wait);
   const auto t0 = std::chrono::steady_clock::now();
   InsertStats stats;
@@ -502,6 +503,14 @@ void MappingServer::restartPublishTimer() {
 }
 
 void MappingServer::publishTimer(const ros::TimerEvent&) { publishMap(false); }
+
+// Readers of the map (views chunk by chunk, octomap_msgs services) let a waiting insert go first:
+// std::mutex is not fair, and a reader taking it again and again would starve the insert.
+void MappingServer::readMap(const OctomapMsgsInterface::MapVisitor& visit) {
+  while (inserts_waiting_.load() > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  std::lock_guard<std::mutex> lock(mutex_);
+  visit(*tree_, classes_);
+}
 
 void MappingServer::publishMap(bool force) {
   std::lock_guard<std::mutex> pass(publish_mutex_);

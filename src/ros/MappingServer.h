@@ -94,6 +94,7 @@ class MappingServer {
   // Publishes the stale outputs that have subscribers (all with `force`). Takes the map mutex
   // to read the map, so callers must not hold it; passes are serialised by publish_mutex_.
   void publishMap(bool force);
+  void readMap(const OctomapMsgsInterface::MapVisitor& visit);  // under the map mutex
   void publishStatus();
   void restartPublishTimer();
 
@@ -167,6 +168,7 @@ class MappingServer {
   size_t local_maps_started_ = 0;
   std::mutex mutex_;  // map, config and outputs: insertion thread, services, timers
   std::mutex publish_mutex_;  // one publish pass at a time; taken before mutex_, never after
+  std::atomic<int> inserts_waiting_{0};  // the insertion thread waits for mutex_
 
   tf2_ros::Buffer tf_buffer_;
   tf2_ros::TransformListener tf_listener_;
