@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Builds the core and the benchmarks in Release, runs evidential_bench on the bundled
 # SemanticKITTI scans (30 inserts forth and back: first pass and steady state), then the revisit
-# and long-sequence benchmarks (scripts/bench_sequences.sh), and regenerates docs/benchmarks.md,
+# and long-sequence benchmarks (scripts/bench_sequences.sh), and regenerates docs/experiments/benchmarks.md,
 # docs/images/bench_cpu_per_scan.png and bench/results/benchmarks.json. Prints the key ratios,
 # and compares them with the previous bench/results/benchmarks.json.
 #
@@ -190,6 +190,6 @@ for k, v in s.items():
         cat "${sequences}/profile.md"
       fi
     fi
-  } >"${root}/docs/benchmarks.md"
-  log "wrote docs/benchmarks.md and bench/results/benchmarks.json"
+  } >"${root}/docs/experiments/benchmarks.md"
+  log "wrote docs/experiments/benchmarks.md and bench/results/benchmarks.json"
 fi

@@ -8,7 +8,7 @@
 #   bash scripts/regen_docs.sh rviz       only the rviz pictures (needs the catkin workspace)
 #   bash scripts/regen_docs.sh all        also docs/data.md (scripts/generate_data_docs.sh), the
 #                                         results and calibration tables (scripts/results.sh) and
-#                                         docs/benchmarks.md (scripts/bench.sh): hours on 2 cores
+#                                         docs/experiments/benchmarks.md (scripts/bench.sh): hours on 2 cores
 #
 # The rviz pictures need a built catkin workspace (bash scripts/test.sh builds build/.catkin_ws),
 # xvfb and imagemagick. Look at the pictures before committing them.
@@ -63,9 +63,9 @@ rviz() {
 others() {
   note "docs/data.md: scripts/generate_data_docs.sh"
   bash scripts/generate_data_docs.sh
-  note "docs/results*.md, docs/calibration_tables.md: scripts/results.sh"
+  note "docs/results*.md, docs/experiments/calibration_tables.md: scripts/results.sh"
   bash scripts/results.sh "${out}/results"
-  note "docs/benchmarks.md: scripts/bench.sh"
+  note "docs/experiments/benchmarks.md: scripts/bench.sh"
   bash scripts/bench.sh
 }
 

@@ -9,7 +9,7 @@ score at the cap a * m^k divided by that dataset's best Brier over caps; the hel
 then scored with it. The same with one fixed cap for comparison, and the fit on all families
 (the library's default constants).
 
-    python3 scripts/calibration/select_cap.py OUT_DIR
+    python3 docs/experiments/drivers/calibration/select_cap.py OUT_DIR
 """
 import glob
 import os

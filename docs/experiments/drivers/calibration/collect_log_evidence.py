@@ -3,7 +3,7 @@
 (dempster, read-out cap 80, so L below 80 comes back exactly and above it in proportion), with
 each map's own adaptive-cap statistic m. Writes <out>/L_<name>.npz per dataset.
 
-    python scripts/calibration/collect_log_evidence.py OUT_DIR    (the venv's python)
+    python docs/experiments/drivers/calibration/collect_log_evidence.py OUT_DIR    (the venv's python)
 """
 import os
 import sys

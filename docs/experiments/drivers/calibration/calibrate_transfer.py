@@ -81,13 +81,13 @@ def row(key, adaptive, written, fit, boot):
 def main():
     directory, page, command = sys.argv[1:4]
     sections = runs_by_section(directory)
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    root = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
     commit = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d")
     text = ["# A `calibrate` fit on a validation split, scored on other data", "",
             "Written by `%s` (commit %s, %s). A user with labelled scans of their own network "
-            "runs `evidential_octomap calibrate` on them ([calibration.md](calibration.md"
+            "runs `evidential_octomap calibrate` on them ([calibration.md](../calibration.md"
             "#with-labelled-scans-of-your-own)); here the validation split is never the data "
             "scored. Generated datasets (**synthetic**): the sequences of the cross-dataset "
             "table ([calibration_tables.md](calibration_tables.md)), calibrated on a shorter "

@@ -7,17 +7,17 @@
 #   - bundled SemanticKITTI scans: calibrate on the held-out protocol's mapped scans, scored on
 #     its queries (learned and derived onehot evidence);
 #   - how many labelled scans: the offroad_all family calibrated on 1, 2, 5 and 10 scans.
-# Writes docs/PAGE (default results_error_model.md).
-#   bash scripts/calibration/error_model.sh [OUT_DIR] [PAGE]     (SCANS=16, SCANS_VALIDATION=10)
+# Writes docs/experiments/PAGE (default results_error_model.md).
+#   bash docs/experiments/drivers/calibration/error_model.sh [OUT_DIR] [PAGE]     (SCANS=16, SCANS_VALIDATION=10)
 set -euo pipefail
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../../.." && pwd)"
 out="${1:-${root}/out/error_model}"
 page="${2:-results_error_model.md}"
 cli="${CLI:-${root}/build/core/src/tools/evidential_octomap}"
 scans="${SCANS:-16}"
 validation_scans="${SCANS_VALIDATION:-10}"
 variants="dempster,reference_compat,sbki,ebs"
-source "${root}/scripts/calibration/datasets.sh"
+source "${root}/docs/experiments/drivers/calibration/datasets.sh"
 # Network models the error model's design was never tried on: its features and terms were chosen
 # on one rocky os1-64 sequence of the poor network with confidently wrong regions, the family of
 # offroad_all (whose seeds here differ).
@@ -74,5 +74,5 @@ for n in 1 2 5 10; do
   compare_calibrated offroad_all "${out}/scans_${n}.yaml" "${out}/scans_${n}" dempster
 done
 
-/usr/bin/python3 "${root}/scripts/calibration/error_model.py" "${out}" "${root}/docs/${page}" \
-  "SCANS=${scans} SCANS_VALIDATION=${validation_scans} bash scripts/calibration/error_model.sh"
+/usr/bin/python3 "${root}/docs/experiments/drivers/calibration/error_model.py" "${out}" "${root}/docs/experiments/${page}" \
+  "SCANS=${scans} SCANS_VALIDATION=${validation_scans} bash docs/experiments/drivers/calibration/error_model.sh"

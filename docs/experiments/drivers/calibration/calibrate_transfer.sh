@@ -5,19 +5,19 @@
 # cap of the file `calibrate` writes (the fit, or -1 when the fit is not better than the adaptive
 # cap beyond its interval) is scored on the table's sequence (both protocols) against the
 # adaptive cap. The bundled scans are calibrated on their first half, the held-out protocol's
-# mapped scans, and scored on the held-out queries (the second half). Writes docs/PAGE (default
+# mapped scans, and scored on the held-out queries (the second half). Writes docs/experiments/PAGE (default
 # results_calibrate.md).
-#   bash scripts/calibration/calibrate_transfer.sh [OUT_DIR] [PAGE]
+#   bash docs/experiments/drivers/calibration/calibrate_transfer.sh [OUT_DIR] [PAGE]
 #   (SCANS=24, SCANS_VALIDATION=8)
 set -euo pipefail
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../../.." && pwd)"
 out="${1:-${root}/out/across_datasets}"
 page="${2:-results_calibrate.md}"
 cli="${CLI:-${root}/build/core/src/tools/evidential_octomap}"
 scans="${SCANS:-24}"
 validation_scans="${SCANS_VALIDATION:-8}"
 mkdir -p "${out}/calibrate"
-source "${root}/scripts/calibration/datasets.sh"
+source "${root}/docs/experiments/drivers/calibration/datasets.sh"
 generated_datasets "${cli}" "${out}" "${scans}"
 
 # The variants scored: the adaptive cap, the cap `calibrate` wrote into FILE and, when that is
@@ -54,7 +54,7 @@ for evidence in learned onehot; do
     --out "${out}/calibrate/compare_bundled_${evidence}" --quiet > /dev/null
 done
 
-/usr/bin/python3 "${root}/scripts/calibration/calibrate_transfer.py" "${out}/calibrate" \
-  "${root}/docs/${page}" \
+/usr/bin/python3 "${root}/docs/experiments/drivers/calibration/calibrate_transfer.py" "${out}/calibrate" \
+  "${root}/docs/experiments/${page}" \
   "SCANS=${scans} SCANS_VALIDATION=${validation_scans} bash \
-scripts/calibration/calibrate_transfer.sh"
+docs/experiments/drivers/calibration/calibrate_transfer.sh"

@@ -1,8 +1,8 @@
 #!/usr/bin/python3
-"""The cross-dataset tables of docs/calibration_tables.md and its reliability diagrams, from the
-compare.json files that scripts/calibration/cross_dataset.sh writes.
+"""The cross-dataset tables of docs/experiments/calibration_tables.md and its reliability diagrams, from the
+compare.json files that docs/experiments/drivers/calibration/cross_dataset.sh writes.
 
-    /usr/bin/python3 scripts/calibration/summarize.py out/cross_dataset docs/calibration_tables.md \
+    /usr/bin/python3 docs/experiments/drivers/calibration/summarize.py out/cross_dataset docs/experiments/calibration_tables.md \
         docs/images/reliability_cross_dataset.png
 
 Targets checked for the default rule (dempster) on every dataset, protocol and evidence source:
@@ -183,11 +183,11 @@ def run_commit(root):
 
 def write_tables(sections, out, commit):
     w = out.write
-    w("# Cross-dataset tables\n\nProduced by `scripts/calibration/cross_dataset.sh` and "
-      "`scripts/calibration/summarize.py` (runs at commit %s, tables %s). Generated datasets are **synthetic** "
-      "(`evidential_octomap generate`, [data.md](data.md)); none of them, nor the bundled or "
+    w("# Cross-dataset tables\n\nProduced by `docs/experiments/drivers/calibration/cross_dataset.sh` and "
+      "`docs/experiments/drivers/calibration/summarize.py` (runs at commit %s, tables %s). Generated datasets are **synthetic** "
+      "(`evidential_octomap generate`, [data.md](../data.md)); none of them, nor the bundled or "
       "RELLIS-3D data, was used to choose the adaptive cap's constants "
-      "([calibration.md](calibration.md)). Every row of a section uses the same queries. "
+      "([calibration.md](../calibration.md)). Every row of a section uses the same queries. "
       "Intervals: paired spatial-block bootstrap against dempster (95 %%, 1000 replicates).\n\n"
       % (commit, datetime.date.today()))
     w("## Targets of the default (`dempster`, adaptive cap)\n\n"
@@ -267,13 +267,13 @@ def main():
     commit = run_commit(sys.argv[1])
     with open(sys.argv[2], "w") as out:
         write_tables(sections, out, commit)
-        out.write("\n![Reliability diagrams](images/%s)\n" % os.path.basename(sys.argv[3]))
+        out.write("\n![Reliability diagrams](../images/%s)\n" % os.path.basename(sys.argv[3]))
     plot_reliability(sections, sys.argv[3], commit)
     if len(sys.argv) == 5:
         lines = []
         write_targets(sections, lines.append)
         figure = os.path.relpath(sys.argv[3], os.path.dirname(os.path.abspath(sys.argv[4])))
-        replace_block(sys.argv[4], "Runs at commit %s, %s (scripts/calibration/cross_dataset.sh)."
+        replace_block(sys.argv[4], "Runs at commit %s, %s (docs/experiments/drivers/calibration/cross_dataset.sh)."
                       "\n\n%s\n![Reliability diagrams](%s)\n"
                       % (commit, datetime.date.today(), "".join(lines), figure))
 

@@ -148,10 +148,10 @@ def main():
     text = f"""# The map's error probability, fitted on a validation split and scored elsewhere
 
 Written by `{command}` (commit {commit}, {date}). `evidential_octomap calibrate` fits the error
-model ([calibration.md](calibration.md#the-error-model)) on a validation split; `compare
+model ([calibration.md](../calibration.md#the-error-model)) on a validation split; `compare
 --calibration FILE` maps the dataset with every rule and reads default dempster's map once more
 with the file (**dempster+calibration**), so every row answers the same queries. Generated
-datasets (**synthetic**, [data.md](data.md)): calibrated on a sequence of the same family with
+datasets (**synthetic**, [data.md](../data.md)): calibrated on a sequence of the same family with
 another seed, scored on the dataset's own sequence. wrong_regions, range_attenuated,
 border_errors, scaled_x0.2 and scaled_x5 are network models the model's design was never tried
 on; offroad_all is the family it was designed on (other seeds). Bundled SemanticKITTI scans:

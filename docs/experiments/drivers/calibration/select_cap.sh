@@ -3,10 +3,10 @@
 # training sequences (SYNTHETIC: four scene families, network behaviours and evidence scales),
 # maps them and the bundled scans (learned and derived one-hot evidence) with the CLI, reads the
 # fused log-evidence of every GT query back, and selects leave-one-family-out.
-#   bash scripts/calibration/select_cap.sh [OUT_DIR]      (default out/select_cap; ~30 min)
+#   bash docs/experiments/drivers/calibration/select_cap.sh [OUT_DIR]      (default out/select_cap; ~30 min)
 # Needs the CLI (build/core) and the Python package (build/python-venv, scripts/test.sh makes both).
 set -euo pipefail
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../../../.." && pwd)"
 out="${1:-${root}/out/select_cap}"
 cli="${CLI:-${root}/build/core/src/tools/evidential_octomap}"
 python="${PYTHON:-${root}/build/python-venv/bin/python}"
@@ -46,8 +46,8 @@ done
 kitti="${root}/data/semantickitti_08_first10"
 map_both kitti_learned "${kitti}" "${root}/config/classes_semantickitti.yaml" learned
 map_both kitti_onehot "${kitti}" "${root}/config/classes_semantickitti.yaml" onehot
-"${python}" "${root}/scripts/calibration/collect_log_evidence.py" "${out}"
-"${python}" "${root}/scripts/calibration/select_cap.py" "${out}" | tee "${out}/selection.md"
+"${python}" "${root}/docs/experiments/drivers/calibration/collect_log_evidence.py" "${out}"
+"${python}" "${root}/docs/experiments/drivers/calibration/select_cap.py" "${out}" | tee "${out}/selection.md"
 # Into docs/calibration.md, between its selection markers, stamped.
 /usr/bin/python3 - "${root}/docs/calibration.md" "${out}/selection.md" \
   "commit $(git -C "${root}" rev-parse --short HEAD), $(date -u +%Y-%m-%d)" <<'EOF'
@@ -58,7 +58,7 @@ page = open(page_path).read()
 if begin not in page or end not in page:
     sys.exit("%s: no %s ... %s block" % (page_path, begin, end))
 head, rest = page.split(begin, 1)
-text = ("Output of `bash scripts/calibration/select_cap.sh` (%s), verbatim:\n" % stamp +
+text = ("Output of `bash docs/experiments/drivers/calibration/select_cap.sh` (%s), verbatim:\n" % stamp +
         open(table_path).read())
 open(page_path, "w").write(head + begin + "\n" + text + end + rest.split(end, 1)[1])
 EOF

@@ -4,7 +4,7 @@ trained on scans 000000-000004 and gives the evidence of 000005-000009, fold B t
 round, so no point's evidence comes from a model that saw its labels. Development only (numpy,
 Debian's python3-numpy is enough); the map, the CLI and the ROS player only read the result.
 
-    /usr/bin/python3 scripts/learned_evidence/train.py          # from the repository root
+    /usr/bin/python3 docs/experiments/drivers/learned_evidence/train.py          # from the repository root
 
 1. `evidential_octomap features` (the C++ CLI; build it first) writes the per-point features,
    so training and inference share one feature implementation (src/evidence/point_features.cpp);
@@ -155,7 +155,7 @@ def write_fixture(path, model_path, scans, ignore, per_fold=4):
     folds = read_model(model_path)
     rng = np.random.default_rng(7)
     with open(path, "w") as f:
-        f.write("# Written by scripts/learned_evidence/train.py: fold, raw features, the script's "
+        f.write("# Written by docs/experiments/drivers/learned_evidence/train.py: fold, raw features, the script's "
                 "float64 evidence of the model as written (test_learned_evidence.cpp).\n")
         for name, mlp in folds.items():
             other = [s for s in FOLDS if s != name][0]
@@ -173,7 +173,7 @@ def write_fixture(path, model_path, scans, ignore, per_fold=4):
 
 def main():
     here = os.path.dirname(os.path.abspath(__file__))
-    root = os.path.abspath(os.path.join(here, "..", ".."))
+    root = os.path.abspath(os.path.join(here, "..", "..", "..", ".."))
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cli", default=os.path.join(root, "build/core/src/tools/evidential_octomap"))
     ap.add_argument("--data", default=os.path.join(root, "data/semantickitti_08_first10"))
@@ -224,7 +224,7 @@ def train_and_write(args, index, scans):
         folds[name] = {"mlp": mlp, "fingerprints": [scans[n]["fingerprint"] for n in train_names]}
     description = ("learned (cross-fitted) evidential MLP %s, EDL loss (Sensoy 2018), trained on "
                    "SemanticKITTI 08 scans 0-4 (fold A) and 5-9 (fold B) by "
-                   "scripts/learned_evidence/train.py" % "-".join(map(str, [len(index["feature_names"])] + args.hidden + [C])))
+                   "docs/experiments/drivers/learned_evidence/train.py" % "-".join(map(str, [len(index["feature_names"])] + args.hidden + [C])))
     os.makedirs(os.path.dirname(args.model), exist_ok=True)
     write_model(args.model, folds, index["feature_names"], C, description)
 

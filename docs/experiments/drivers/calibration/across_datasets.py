@@ -119,7 +119,7 @@ def main():
         for v in by_variant:
             if v not in variants:
                 variants.append(v)
-    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    root = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", "..", ".."))
     commit = subprocess.run(["git", "-C", root, "rev-parse", "--short", "HEAD"],
                             capture_output=True, text=True).stdout.strip()
     stamp = datetime.now(timezone.utc).strftime("%Y-%m-%d")
@@ -131,7 +131,7 @@ def main():
             "section answers the same queries. Δ: paired bootstrap against `dempster` (the "
             "default), 95 %% interval over 10 m blocks. cap (m): the read-out cap of a dempster "
             "map and the mean point log-evidence m of its evidence "
-            "([calibration.md](calibration.md)). Classes below the input: classes with "
+            "([calibration.md](../calibration.md)). Classes below the input: classes with "
             "≥ 1,000 GT queries whose map IoU is below the per-point input's (reconstruction)."
             % (command, commit, stamp), ""]
     text += section_table(runs, boot, variants)
