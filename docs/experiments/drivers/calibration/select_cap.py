@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Chooses the constants of the adaptive read-out cap, evidence_cap = a * m^k (m: a map's mean
 per-point log-evidence), leave-one-family-out, from the L_<name>.npz files of
-collect_log_evidence.py, and prints the table of docs/calibration.md.
+collect_log_evidence.py, and prints the table of docs/experiments/cap_selection.md.
 
 For each held-out family (a name's prefix before "_": farm, forest, grass, rocky, kitti) (a, k) is
 fitted on the other families only, minimising the mean over datasets and protocols of the Brier

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Chooses the adaptive read-out cap's constants (docs/calibration.md) from scratch: generates the
+# Chooses the adaptive read-out cap's constants (docs/experiments/cap_selection.md) from scratch: generates the
 # training sequences (SYNTHETIC: four scene families, network behaviours and evidence scales),
 # maps them and the bundled scans (learned and derived one-hot evidence) with the CLI, reads the
 # fused log-evidence of every GT query back, and selects leave-one-family-out.
@@ -48,8 +48,8 @@ map_both kitti_learned "${kitti}" "${root}/config/classes_semantickitti.yaml" le
 map_both kitti_onehot "${kitti}" "${root}/config/classes_semantickitti.yaml" onehot
 "${python}" "${root}/docs/experiments/drivers/calibration/collect_log_evidence.py" "${out}"
 "${python}" "${root}/docs/experiments/drivers/calibration/select_cap.py" "${out}" | tee "${out}/selection.md"
-# Into docs/calibration.md, between its selection markers, stamped.
-/usr/bin/python3 - "${root}/docs/calibration.md" "${out}/selection.md" \
+# Into docs/experiments/cap_selection.md, between its selection markers, stamped.
+/usr/bin/python3 - "${root}/docs/experiments/cap_selection.md" "${out}/selection.md" \
   "commit $(git -C "${root}" rev-parse --short HEAD), $(date -u +%Y-%m-%d)" <<'EOF'
 import sys
 page_path, table_path, stamp = sys.argv[1:]
