@@ -40,7 +40,7 @@ def stamp(text):
     title = lines[0][2:].strip() if lines and lines[0].startswith("# ") else None
     head = re.split(r"^## ", "\n".join(lines[1:]), maxsplit=1, flags=re.M)[0]
     command = re.search(r"`([^`]+)`", head)
-    commit = re.search(r"commits? ([0-9a-f]{7,40})\b", head)
+    commit = re.search(r"commits?\s+([0-9a-f]{7,40})\b", head)
     date = re.search(r"\b(20\d\d-\d\d-\d\d)\b", head)
     return (title, command and command.group(1), commit and commit.group(1),
             date and date.group(1))
