@@ -143,13 +143,16 @@ FIGURES = {f.__name__: f for f in (live_rate, ros2_rate, clearing_ghosts, local_
                                    error_model, learned_heldout, speed, cutoff)}
 
 
-def render(text):
-    """The page with every block's body regenerated."""
+def render(text, page):
+    """The page with every block's body regenerated, its links relative to the page."""
+    records = os.path.relpath(os.path.join("docs", "experiments"), os.path.dirname(page) or ".")
+
     def body(m):
         key = m.group(2)
         if key not in FIGURES:
             raise MissingFigure("no figure %r (scripts/docs/figures.py FIGURES)" % key)
-        return m.group(1) + FIGURES[key]() + "\n" + m.group(4)
+        figure = FIGURES[key]().replace("](experiments/", "](%s/" % records)
+        return m.group(1) + figure + "\n" + m.group(4)
     return BLOCK.sub(body, text)
 
 
@@ -159,7 +162,7 @@ def stale_pages(root=doc_pages.ROOT):
     for page in doc_pages.user_pages(root):
         text = doc_pages.read(page, root)
         try:
-            if render(text) != text:
+            if render(text, page) != text:
                 out.append((page, "a figures block is not current"))
         except MissingFigure as e:
             out.append((page, str(e)))
@@ -174,7 +177,7 @@ def main():
         sys.exit(1 if stale else 0)
     for page in doc_pages.user_pages():
         text = doc_pages.read(page)
-        new = render(text)
+        new = render(text, page)
         if new != text:
             with open(os.path.join(doc_pages.ROOT, page), "w", encoding="utf-8") as f:
                 f.write(new)
