@@ -36,7 +36,7 @@ void stampAndSend(StaleOutput* output, Message message, const ros::Time& time) {
 }
 
 std::string uncertaintyName(const EvidentialOcTree& tree, UncertaintyView view) {
-  if (view == UncertaintyView::kErrorProbability) return "P(label wrong)";  // 1 - max p
+  if (view == UncertaintyView::kErrorProbability) return "error probability";  // P(label wrong)
   return tree.rule().uncertaintyIsMass() ? "vacuity u" : "uncertainty (Dirichlet var.)";
 }
 
