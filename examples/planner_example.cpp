@@ -46,7 +46,8 @@ void describe(const EvidentialOcTree& map, const octomap::point3d& p) {
 // Walks the voxels from `from` to `to` to the first occupied one, and says whether its class can
 // be trusted (error probability below kMaxErrorProbability), as a planner deciding to drive over
 // or around it.
-void walkRay(const EvidentialOcTree& map, const octomap::point3d& from, const octomap::point3d& to) {
+void walkRay(const EvidentialOcTree& map, const octomap::point3d& from,
+             const octomap::point3d& to) {
   octomap::KeyRay keys;
   if (!map.computeRayKeys(from, to, keys)) {
     std::cout << "ray: leaves the map's key range\n";

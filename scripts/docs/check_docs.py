@@ -5,8 +5,8 @@
 - no user page (README, docs/*.md) tells project history (issue numbers, dated runs, commits,
   load averages, before/after) or quotes a measured figure outside a generated block;
 - README has at most 150 lines; the user pages hold at most 20,000 words in all;
-- the generated blocks (scripts/docs/figures.py) and the experiments index are current, and
-  every record has a stamp;
+- the generated blocks (scripts/docs/figures.py) and the experiments index are current, every
+  record has a stamp, and the planner example uses the cut-off its record recommends;
 - docs/troubleshooting.md quotes only messages the sources hold, and every message of the map
   loader and the ROS 1 node.
 
@@ -56,7 +56,8 @@ def outside_generated(text):
 
 def link_problems(root):
     out = []
-    for page in doc_pages.user_pages(root) + doc_pages.record_pages(root) + [experiments_index.INDEX]:
+    pages = doc_pages.user_pages(root) + doc_pages.record_pages(root) + [experiments_index.INDEX]
+    for page in pages:
         for target in doc_pages.links(doc_pages.read(page, root)):
             why = doc_pages.broken_link(page, target, root)
             if why:
@@ -96,6 +97,20 @@ def generated_problems(root):
     return out + experiments_index.missing_stamps(root)
 
 
+def cutoff_problems(root):
+    """The planner example trusts a label below the cut-off its record recommends."""
+    example = os.path.join(root, "examples", "planner_example.cpp")
+    record = os.path.join(root, doc_pages.RECORDS, "cutoff.md")
+    if not (os.path.exists(example) and os.path.exists(record)):
+        return []
+    used = re.search(r"kMaxErrorProbability = ([\d.]+)f", open(example).read())
+    advised = re.search(r"Recommended cut-off: error probability < ([\d.]+)", open(record).read())
+    if not used or not advised or float(used.group(1)) != float(advised.group(1)):
+        return ["examples/planner_example.cpp: kMaxErrorProbability is not the cut-off of %s"
+                % os.path.join(doc_pages.RECORDS, "cutoff.md")]
+    return []
+
+
 def message_problems(root):
     out = ["%s: `%s` occurs in no source" % (messages.PAGE, m)
            for m in messages.missing_in_sources(root)]
@@ -109,7 +124,7 @@ def problems(root=doc_pages.ROOT):
     measured = [p for p in users if p not in GENERATED_PAGES]
     return (link_problems(root) + pattern_problems(root, HISTORY, users)
             + pattern_problems(root, FIGURE, measured) + size_problems(root)
-            + generated_problems(root) + message_problems(root))
+            + generated_problems(root) + cutoff_problems(root) + message_problems(root))
 
 
 def main():

@@ -21,9 +21,11 @@ Every table of measured numbers behind a figure of the user guides, each generat
 named here and stamped with the commit and date of its run. The data they use is real (the
 bundled SemanticKITTI and RELLIS-3D scans) or generated and labelled **synthetic**
 ([../data.md](../data.md)). The scripts that run the experiments are beside them, in
-[drivers/](drivers/): [drivers/calibration/](drivers/calibration/) (the cross-dataset tables, the
-read-out cap's selection, the error model) and [drivers/learned_evidence/](drivers/learned_evidence/)
-(training the bundled evidence head). They are experiment code, not something a user runs to map.
+[drivers/](drivers/): [drivers/calibration/](drivers/calibration/) (the cross-dataset tables,
+the read-out cap's selection, the error model),
+[drivers/learned_evidence/](drivers/learned_evidence/) (training the bundled evidence head) and
+[drivers/cutoff/](drivers/cutoff/) (the planner's cut-off). They are experiment code, not
+something a user runs to map.
 
 This page is written by `python3 scripts/docs/experiments_index.py` from the records' stamps (the
 docs check in ctest fails when it is not current).

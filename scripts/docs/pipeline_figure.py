@@ -19,10 +19,13 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
 # (x, y, title, detail, colour): one box per stage; x, y are the box centre.
 STAGES = [
-    (1.0, 3.0, "LiDAR scan", "x, y, z\n+ your network's\nlogits, probabilities,\nevidence or labels", "#dfe9f5"),
-    (3.4, 3.0, "point evidence", "e >= 0 per class\nopinion b = e / S,\nvacuity u = C / S", "#dfe9f5"),
+    (1.0, 3.0, "LiDAR scan",
+     "x, y, z\n+ your network's\nlogits, probabilities,\nevidence or labels", "#dfe9f5"),
+    (3.4, 3.0, "point evidence",
+     "e >= 0 per class\nopinion b = e / S,\nvacuity u = C / S", "#dfe9f5"),
     (5.8, 3.9, "occupancy", "rays: OctoMap's\nlog-odds (free, hit)", "#e6f2df"),
-    (5.8, 2.1, "kernel", "each point's evidence\nspread over nearby\nvoxels (sparse kernel)", "#e6f2df"),
+    (5.8, 2.1, "kernel",
+     "each point's evidence\nspread over nearby\nvoxels (sparse kernel)", "#e6f2df"),
     (8.2, 3.0, "voxel", "Dempster's rule in\nevidence space:\nlog-evidence L per class", "#fbeedb"),
     (10.6, 3.0, "read-out", "label = argmax b\nerror probability\nvacuity u, conflict", "#f6e0e0"),
     (13.0, 3.0, "outputs", ".ot / .bt files, views,\n~query, cost map,\nPython arrays", "#f6e0e0"),

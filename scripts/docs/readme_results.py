@@ -22,8 +22,9 @@ def row(name, m):
 def table(metrics, commit, date):
     rule = metrics["parameters"]["rule"]
     lines = [
-        "| %s GT-labelled points of the 10 bundled SemanticKITTI 08 scans | mIoU %% | Acc %% | Brier "
-        "| ECE | AUROC of the error probability for wrong labels |" % format(metrics["map"]["queries"], ","),
+        "| %s GT-labelled points of the 10 bundled SemanticKITTI 08 scans | mIoU %% | Acc %% "
+        "| Brier | ECE | AUROC of the error probability for wrong labels |"
+        % format(metrics["map"]["queries"], ","),
         "|---|---|---|---|---|---|",
         row(metrics["input"]["description"], metrics["input"]),
         row("**map** (`%s`, the defaults)" % rule, metrics["map"]),

@@ -32,7 +32,7 @@ class Repo:
         self.write("docs/troubleshooting.md", TROUBLE)
         self.write("docs/experiments/a.md", RECORD)
         self.write("docs/data.md", "# Data\n")  # the index links these
-        for driver in ("calibration", "learned_evidence"):
+        for driver in ("calibration", "learned_evidence", "cutoff"):
             self.write("docs/experiments/drivers/%s/x.py" % driver, "")
         for path in messages.MUST_COVER:
             self.write(path, "")
@@ -113,6 +113,16 @@ class DocsCheck(unittest.TestCase):
         self.repo.write("docs/guide.md", "# Guide\n\n<!-- generated: figures nosuch -->\nold\n"
                         "<!-- end -->\n")
         self.assertReports("no figure 'nosuch'")
+
+    def test_a_planner_cut_off_other_than_the_record_s_is_reported(self):
+        self.repo.write("docs/experiments/cutoff.md", RECORD + "\nRecommended cut-off: error "
+                        "probability < 0.20: it keeps\n")
+        self.repo.write(experiments_index.INDEX, experiments_index.index(self.repo.root))
+        example = "examples/planner_example.cpp"
+        self.repo.write(example, "constexpr float kMaxErrorProbability = 0.2f;")
+        self.assertEqual(self.repo.problems(), [])
+        self.repo.write(example, "constexpr float kMaxErrorProbability = 0.5f;")
+        self.assertReports("kMaxErrorProbability is not the cut-off")
 
     def test_a_message_gone_from_the_sources_is_reported(self):
         self.repo.write("src/core/io.cpp", "void f() {}\n")
