@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """The docs check (ctest `docs_check`): README and docs/ as a user reads them.
 
-- every relative link of README, docs/*.md and docs/experiments/*.md resolves, #anchors included;
+- every relative link of README, docs/*.md, docs/experiments/*.md and the other READMEs resolves,
+  #anchors included;
 - no user page (README, docs/*.md) tells project history (issue numbers, dated runs, commits,
   load averages, before/after) or quotes a measured figure outside a generated block;
 - README has at most 150 lines; the user pages hold at most 20,000 words in all;
@@ -24,6 +25,8 @@ import messages  # noqa: E402
 
 README_LINES = 150
 USER_WORDS = 20000
+# Other pages whose links are checked too.
+OTHER_PAGES = ["CHANGELOG.md", "bench/README.md", "config/README.md", "data/README.md"]
 # Pages a program writes whole (their numbers are the code's defaults, not measurements).
 GENERATED_PAGES = {os.path.join("docs", "parameters.md")}
 
@@ -57,6 +60,7 @@ def outside_generated(text):
 def link_problems(root):
     out = []
     pages = doc_pages.user_pages(root) + doc_pages.record_pages(root) + [experiments_index.INDEX]
+    pages += [p for p in OTHER_PAGES if os.path.exists(os.path.join(root, p))]
     for page in pages:
         for target in doc_pages.links(doc_pages.read(page, root)):
             why = doc_pages.broken_link(page, target, root)
