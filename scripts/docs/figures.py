@@ -139,8 +139,26 @@ def cutoff():
             "commit %s, %s)." % (cut, share, rate, link, commit, date))
 
 
+def merge_equality():
+    text, link, commit, date = record("python.md")
+    exact = row(text, "10 x 1, in order (sequential)", "python.md")
+    plain = row(text, "10 x 1, plain (sequential)", "python.md")
+    return ("Ten one-scan chunks of the bundled scans merged in order: %s query labels differ "
+            "from the sequential map (beliefs to %s); merged without the unplaced evidence, %s "
+            "do (%s, commit %s, %s)." % (exact[1], exact[2], plain[1], link, commit, date))
+
+
+def data_presets():
+    text, link, commit, date = record("data.md")
+    good, poor = row(text, "good", "data.md"), row(text, "poor", "data.md")
+    return ("Per point on a forest sequence, the `good` preset's network is right %s of the time "
+            "(AUROC of u for its errors %s), the `poor` one's %s (%s) (%s, commit %s, %s)." % (
+                good[2], good[3], poor[2], poor[3], link, commit, date))
+
+
 FIGURES = {f.__name__: f for f in (live_rate, ros2_rate, clearing_ghosts, local_map_memory,
-                                   error_model, learned_heldout, speed, cutoff)}
+                                   error_model, learned_heldout, speed, cutoff, merge_equality,
+                                   data_presets)}
 
 
 def render(text, page):
