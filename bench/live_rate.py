@@ -4,7 +4,7 @@
     bench/live_rate.py --minutes 5 --rate 10 --out build/live_rate [--max-range 50]
 
 Starts its own roscore (a free port), `roslaunch evidential_octomap mapping.launch` (the live
-settings; max range 50 m as in docs/benchmarks.md, written to OUT/max_range.yaml and passed as
+settings; max range 50 m as in docs/experiments/benchmarks.md, written to OUT/max_range.yaml and passed as
 the launch's config:=, since config/mapping.yaml leaves the range unlimited) and `play_semantickitti.py` looping the bundled scans (0..9, 0..9, ...: the area
 revisited) with `_rate:=RATE` (RATE clouds a second, as long as the player keeps up: the rate
 received is measured, from ~status). Every

@@ -3,7 +3,7 @@
 
     bench/local_map_report.py OUT [--docs]
 
---docs writes the section into docs/long_missions.md between its markers and the plot into
+--docs writes the section into docs/experiments/local_map.md between its markers and the plot into
 docs/images/local_map_memory.png.
 """
 import argparse
@@ -108,7 +108,7 @@ def main():
              "(SYNTHETIC sequence, derived one-hot evidence × 20, 2 threads). Its record:*", "",
              "```", meta, "```", "", "RSS (getrusage) of each process after every scan:", ""]
     lines += memory_rows(runs)
-    lines += ["", "![RSS against scans inserted](images/local_map_memory.png)", "",
+    lines += ["", "![RSS against scans inserted](../images/local_map_memory.png)", "",
               "The local map's global map (tiles merged with the resident map, "
               "`LocalMap::globalMap`) against the whole map, leaf by leaf "
               "(`evidential_map_io_bench --same-as`):", ""]
@@ -120,7 +120,7 @@ def main():
     text = "\n".join(lines)
     print(text)
     if a.docs:
-        path = os.path.join(REPO, "docs/long_missions.md")
+        path = os.path.join(REPO, "docs/experiments/local_map.md")
         doc = open(path).read()
         head, rest = doc.split(MARKERS[0])
         tail = rest.split(MARKERS[1])[1]

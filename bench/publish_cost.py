@@ -153,14 +153,14 @@ def report(args, runs, scans):
     with open(os.path.join(args.out, "summary.md"), "w") as f:
         f.write("\n".join(text) + "\n")
     print("\n".join(text))
-    if args.docs:  # the table into docs/ros.md between its markers, the picture beside it
+    if args.docs:  # the table into docs/experiments/publishing_cost.md between its markers, the picture beside it
         fig.savefig(os.path.join(REPO, "docs/images/publish_cost.png"), dpi=110)
-        path = os.path.join(REPO, "docs/ros.md")
+        path = os.path.join(REPO, "docs/experiments/publishing_cost.md")
         doc = open(path).read()
         begin, end = "<!-- publish-cost: begin -->", "<!-- publish-cost: end -->"
         head, rest = doc.split(begin)
         tail = rest.split(end)[1]
-        body = "\n".join(text + ["", "![publishing cost against map size](images/publish_cost.png)"])
+        body = "\n".join(text + ["", "![publishing cost against map size](../images/publish_cost.png)"])
         with open(path, "w") as f:
             f.write(head + begin + "\n" + body + "\n" + end + tail)
 

@@ -1,5 +1,5 @@
-// A planner's side of a map: load an .ot safely, ask class, belief and uncertainty at points and
-// along a ray, and keep going when a file is refused.
+// A planner's side of a map: load an .ot safely, ask class, belief and error probability at
+// points and along a ray, and keep going when a file is refused.
 //   planner_example map.ot [x y z]...        every point is queried; the first two also as a ray
 // Exit code 0: map loaded and queried; 2: the map was refused (the planner keeps its last map).
 #include <evidential_octomap/evidential_octree.h>
@@ -16,6 +16,10 @@ namespace {
 
 using evidential_octomap::EvidentialOcTree;
 
+// A label is trusted below this error probability (the probability that it is wrong). The cut-off
+// recommended by docs/experiments/cutoff.md, where its measured error rate is.
+constexpr float kMaxErrorProbability = 0.2f;
+
 // What a planner wants to know about one place: occupied? which class, how sure?
 void describe(const EvidentialOcTree& map, const octomap::point3d& p) {
   const octomap::OcTreeNode* node = map.search(p);
@@ -30,17 +34,20 @@ void describe(const EvidentialOcTree& map, const octomap::point3d& p) {
     std::cout << ", no semantic evidence\n";
     return;
   }
-  // belief[c]: the mass committed to class c; uncertainty u: the mass left uncommitted. With the
-  // dempster rule the read-out cap keeps u above a small floor, so never wait for u == 0.
+  // The error probability: how likely the label is wrong (the calibration's error model when one
+  // is applied, else 1 - max p). belief[c]: the mass committed to class c; the vacuity u: how
+  // little evidence the voxel holds, which never reaches 0 and does not say whether it is right.
   std::cout << ", class " << map.classNames()[opinion.label] << ", belief "
-            << opinion.belief[opinion.label] << ", uncertainty " << opinion.uncertainty
+            << opinion.belief[opinion.label] << ", error probability "
+            << map.rule().errorProbability(opinion) << ", vacuity u " << opinion.uncertainty
             << ", conflict " << opinion.conflict << "\n";
 }
 
 // Walks the voxels from `from` to `to` to the first occupied one, and says whether its class can
-// be trusted (u at most max_uncertainty), as a planner deciding to drive over or around it.
-void walkRay(const EvidentialOcTree& map, const octomap::point3d& from, const octomap::point3d& to,
-             double max_uncertainty) {
+// be trusted (error probability below kMaxErrorProbability), as a planner deciding to drive over
+// or around it.
+void walkRay(const EvidentialOcTree& map, const octomap::point3d& from,
+             const octomap::point3d& to) {
   octomap::KeyRay keys;
   if (!map.computeRayKeys(from, to, keys)) {
     std::cout << "ray: leaves the map's key range\n";
@@ -60,10 +67,11 @@ void walkRay(const EvidentialOcTree& map, const octomap::point3d& from, const oc
     std::cout << "ray: stops at (" << c.x() << ", " << c.y() << ", " << c.z() << "), occupied";
     if (opinion.label < 0)
       std::cout << ", no semantic evidence";
-    else
-      std::cout << ", class " << map.classNames()[opinion.label] << ", uncertainty "
-                << opinion.uncertainty
-                << (opinion.uncertainty <= max_uncertainty ? " (trusted)" : " (not trusted)");
+    else {
+      const float p_wrong = map.rule().errorProbability(opinion);
+      std::cout << ", class " << map.classNames()[opinion.label] << ", error probability "
+                << p_wrong << (p_wrong < kMaxErrorProbability ? " (trusted)" : " (not trusted)");
+    }
     std::cout << "; " << unknown << " unknown voxels before it\n";
     return;
   }
@@ -94,6 +102,6 @@ int main(int argc, char** argv) {
   for (int i = 2; i + 2 < argc; i += 3)
     points.emplace_back(std::atof(argv[i]), std::atof(argv[i + 1]), std::atof(argv[i + 2]));
   for (const auto& p : points) describe(*map, p);
-  if (points.size() >= 2) walkRay(*map, points[0], points[1], /*max_uncertainty=*/0.5);
+  if (points.size() >= 2) walkRay(*map, points[0], points[1]);
   return 0;
 }

@@ -300,7 +300,8 @@ int fuzzOtReader(const uint8_t* data, size_t size) {
 
   // 1. The generic OctoMap reader, as any program that links the library calls it. Files of
   //    OctoMap's own types go to OctoMap's readers, which are not ours to fuzz (they trust
-  //    their input: no depth limit, see docs/reliability.md); loadMap below still gets them.
+  //    their input: no depth limit, see docs/experiments/reliability.md); loadMap below still gets
+  //    them.
   const OtHeader header = OtHeaderReader::parse(bytes);
   bool generic_ok = false;
   if (header.id == "EvidentialOcTree") {

@@ -1,4 +1,4 @@
-// What happens to mutated map files (docs/reliability.md): every seed .ot in a
+// What happens to mutated map files (docs/experiments/reliability.md): every seed .ot in a
 // directory is mutated N times by the replay harness's mutator (mutator.h) and loaded with
 // loadMap. Each outcome is counted: refused, loaded as the very same map, loaded as another seed
 // (a splice that put one whole valid file after the mutated bytes: no check can refuse it),

@@ -4,7 +4,7 @@
 # memory, and the same insert in a LocalMap (radius 60 m, tiles on disk), each alone in its
 # process (its own RSS after every scan); then evidential_map_io_bench on the whole map after a
 # third, two thirds and all of the sequence, and on the local map's global map (leaf by leaf
-# against the whole map). bench/local_map_report.py turns OUT into docs/long_missions.md.
+# against the whole map). bench/local_map_report.py turns OUT into docs/experiments/local_map.md.
 #
 #   scripts/bench_local_map.sh BIN_DIR OUT   # BIN_DIR: build/core/bench (Release)
 #

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Measures the steady-state and long-sequence benchmarks with evidential_sequence_bench into OUT
 # (CSV files and meta.txt: commit, date, load average, commands). scripts/bench.sh calls it and
-# turns the files into docs/benchmarks.md with bench/sequence_report.py.
+# turns the files into docs/experiments/benchmarks.md with bench/sequence_report.py.
 #
 #   scripts/bench_sequences.sh BIN OUT    # BIN: the evidential_sequence_bench executable
 #

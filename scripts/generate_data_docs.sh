@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Pictures and numbers of docs/data.md, from datasets the generator writes here (all SYNTHETIC):
+# Pictures of docs/data.md and numbers of docs/experiments/data.md, from datasets the generator writes here (all SYNTHETIC):
 #   docs/images/data_topdown_<family>.png  top-down view of each scene family (GT classes)
 #   docs/images/data_reliability.png       per-point reliability diagrams of the network presets
-#   build/data_docs/metrics.md             per-point metrics of each preset (pasted into data.md)
+#   build/data_docs/metrics.md             per-point metrics of each preset (pasted into docs/experiments/data.md)
 #   build/data_docs/families.md            the same of the good preset in each family
 # Needs the CLI (built here if missing) and /usr/bin/python3 with numpy, matplotlib, yaml
 # (scripts/packages.txt). Usage: bash scripts/generate_data_docs.sh   (JOBS=N, default 2)

@@ -7,8 +7,9 @@
 #   bash scripts/regen_docs.sh readme     only the README's pictures and table (no ROS needed)
 #   bash scripts/regen_docs.sh rviz       only the rviz pictures (needs the catkin workspace)
 #   bash scripts/regen_docs.sh all        also docs/data.md (scripts/generate_data_docs.sh), the
-#                                         results and calibration tables (scripts/results.sh) and
-#                                         docs/benchmarks.md (scripts/bench.sh): hours on 2 cores
+#                                         records of docs/experiments/ (scripts/results.sh,
+#                                         scripts/bench.sh): hours on 2 cores
+# Every run ends with the experiments index and the guides' figure blocks (scripts/docs/).
 #
 # The rviz pictures need a built catkin workspace (bash scripts/test.sh builds build/.catkin_ws),
 # xvfb and imagemagick. Look at the pictures before committing them.
@@ -63,9 +64,9 @@ rviz() {
 others() {
   note "docs/data.md: scripts/generate_data_docs.sh"
   bash scripts/generate_data_docs.sh
-  note "docs/results*.md, docs/calibration_tables.md: scripts/results.sh"
+  note "docs/experiments/results*.md, calibration_tables.md: scripts/results.sh"
   bash scripts/results.sh "${out}/results"
-  note "docs/benchmarks.md: scripts/bench.sh"
+  note "docs/experiments/benchmarks.md: scripts/bench.sh"
   bash scripts/bench.sh
 }
 
@@ -74,6 +75,9 @@ case "${what}" in
   readme) readme ;;
   rviz) ros_tables; rviz ;;
   all) readme; ros_tables; rviz; others ;;
-  *) sed -n '2,14p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//' >&2; exit 2 ;;
+  *) sed -n '2,15p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//' >&2; exit 2 ;;
 esac
+note "docs/experiments/README.md and the guides' figure blocks: scripts/docs/"
+/usr/bin/python3 scripts/docs/experiments_index.py
+/usr/bin/python3 scripts/docs/figures.py
 note "done (${stamp}); git diff --stat shows what changed"

@@ -1,6 +1,7 @@
 // The learned evidence head: C++ inference against the training script's own outputs
-// (test/fixtures/learned_evidence_points.txt, written by scripts/learned_evidence/train.py),
-// model-file errors, and the cross-fitting rule (a scan never gets a fold that saw it).
+// (test/fixtures/learned_evidence_points.txt, written by
+// docs/experiments/drivers/learned_evidence/train.py), model-file errors, and the cross-fitting
+// rule (a scan never gets a fold that saw it).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -76,7 +76,7 @@ class FusionRule {
   std::vector<float> probabilities(const VoxelOpinion& opinion) const;
   // The map's probability that the voxel's label is wrong: the error model's when the rule has
   // one (fitted by `calibrate`), else 1 - max_c p_c, the read-out that detects wrong labels best
-  // across datasets without labels (docs/results.md); 1 without a label.
+  // across datasets without labels (docs/experiments/results.md); 1 without a label.
   float errorProbability(const VoxelOpinion& opinion) const;
   // The error model the read-out applies (dempster only: ErrorModel's features are of L);
   // null removes it. Throws std::invalid_argument for another rule.

@@ -27,12 +27,12 @@ struct MapSettings {
   // The paper's two uncertainty mechanisms (its Table II): the adaptive support length
   // l * beta * e^(1 - gamma u) (off: gamma = 0, support l * beta * e for every point) and the
   // per-scan percentile threshold. Both are OFF by default, chosen by measurement
-  // (docs/results.md, "defaults"): on the bundled sequence each one lowers mIoU and raises the
-  // Brier score with learned and knn-vote evidence (with one-hot evidence every point has the
-  // same u and the threshold drops nothing). The threshold drops a scan's most uncertain points,
-  // which are mostly rare-class and far points (learned evidence: bicycle and parking vanish),
-  // and the adaptive length shortens exactly the supports that need neighbours' support most.
-  // The uncertainty still acts: it weighs every contribution through the extended belief.
+  // (docs/experiments/results.md, "defaults"): on the bundled sequence each one lowers mIoU and
+  // raises the Brier score with learned and knn-vote evidence (with one-hot evidence every point
+  // has the same u and the threshold drops nothing). The threshold drops a scan's most uncertain
+  // points, which are mostly rare-class and far points (learned evidence: bicycle and parking
+  // vanish), and the adaptive length shortens exactly the supports that need neighbours' support
+  // most. The uncertainty still acts: it weighs every contribution through the extended belief.
   bool adaptive_length = false;
   bool uncertainty_threshold = false;
   // The authors' released configuration: adaptive length commented out (gamma = 0, support
@@ -48,7 +48,7 @@ struct MapSettings {
   // scans), and without a cap Dempster's product counts them as if they were: u -> 0 and
   // p -> 1 in every well-observed voxel, right or wrong. Only the read-out changes, so the map
   // stays exact, order-independent and mergeable. 3 minimises the Brier score on the bundled
-  // sequence (docs/results.md).
+  // sequence (docs/experiments/results.md).
   // kAdaptiveCap (the default): the cap follows the evidence. The tree sets it after every
   // insert to adaptiveEvidenceCap(m), m the mean over the points it was given of a point's own
   // log-evidence sum_c log1p(e^c / C): a confident network (large m) earns a higher cap, though
@@ -87,14 +87,14 @@ struct MapSettings {
   // person or a pole standing on it (and cost less), but also fill less between a vertical
   // surface's scan lines. 1 (a ball) by default, chosen across datasets: on the bundled street
   // 0.5 keeps the person class, on generated forest and rocky scenes it costs Brier score
-  // (docs/results_vertical_support.md).
+  // (docs/experiments/results_vertical_support.md).
   double vertical_support = 1.0;
   // The same fraction for the points of ground classes (`ground: true` in the class table,
   // EvidentialOcTree::setGroundClasses): their support is flatter than other points', so a
   // road's, a trail's or a meadow's evidence stays on the ground instead of climbing a person,
   // a trunk or a rock standing on it. 0.25 by default, chosen across datasets against 1 (a
-  // ball) and 0.5 (docs/results_ground_support.md). No class is ground unless the class table
-  // says so, so a table without the flag keeps every support at vertical_support.
+  // ball) and 0.5 (docs/experiments/results_ground_support.md). No class is ground unless the class
+  // table says so, so a table without the flag keeps every support at vertical_support.
   double ground_vertical_support = 0.25;
   // Max sensor range [m] for occupancy and semantics; < 0 means unlimited.
   double max_range = -1.0;
@@ -120,15 +120,16 @@ struct InsertSettings {
   // after two cells already cleared by this scan's other rays, so the many rays that overlap
   // near the sensor are cast once (voxblox's "fast" integrator rule). Hits, semantics and the
   // free space near the hits are as in the exact mode; a few cells that only a stopped ray
-  // would have crossed stay unobserved that scan (docs/benchmarks.md measures the difference).
-  // An insertion setting like threads: not stored in the map.
+  // would have crossed stay unobserved that scan (docs/experiments/benchmarks.md measures the
+  // difference). An insertion setting like threads: not stored in the map.
   bool fast_free_space = false;
   // Point evidence below this value counts as 0 (0: off). An evidential network's softplus or
-  // exp head gives every class some evidence, nearly all of it tiny. A contribution's log-evidence is below
-  // evidence_floor / C for such a class and its uncertainty u = C / S moves by at most
-  // C * evidence_floor / S, while each value kept costs work in the kernel and memory in the
-  // map. 0.01 (1 % of one class's prior weight) makes learned evidence as cheap as one-hot
-  // (docs/benchmarks.md measures cost and map quality). An insertion setting: not stored.
+  // exp head gives every class some evidence, nearly all of it tiny. A contribution's log-evidence
+  // is below evidence_floor / C for such a class and its uncertainty u = C / S moves by at most C *
+  // evidence_floor / S, while each value kept costs work in the kernel and memory in the map. 0.01
+  // (1 % of one class's prior weight) makes learned evidence as cheap as one-hot
+  // (docs/experiments/benchmarks.md measures cost and map quality). An insertion setting: not
+  // stored.
   double evidence_floor = 0.0;
   // Moving objects leave no ghosts: each clearing observation of a voxel (a ray of a scan passes
   // through it and no ray ends in it) discounts the semantic evidence it holds after the scan,
@@ -146,8 +147,8 @@ struct InsertSettings {
   // hold its voxel against the evidence around it. A voxel hit by no point of this scan, or by
   // one of the point's class, gets the full weight; a point always reaches its own voxel.
   // At 1 the many points of a road or a wall outvote the few of a person or a pole standing on
-  // it. 0.75 is chosen across datasets (docs/results_other_class_weight.md); 0 stops the
-  // support but makes a map over-confident where the network is wrong. An insertion setting:
+  // it. 0.75 is chosen across datasets (docs/experiments/results_other_class_weight.md); 0 stops
+  // the support but makes a map over-confident where the network is wrong. An insertion setting:
   // not stored in the map.
   double other_class_weight = 0.75;
   static constexpr int kMaxClearingObservations = 1000;

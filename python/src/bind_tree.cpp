@@ -105,13 +105,16 @@ void bindResults(nb::module_& m) {
       .def_ro("belief", &QueryResult::belief, kShared,
               "(N, C) float32: dempster belief masses; sbki/ebs expected probabilities.")
       .def_ro("uncertainty", &QueryResult::uncertainty, kShared,
-              "(N,) float32: dempster mass u; sbki/ebs Dirichlet variance of the label.")
+              "(N,) float32: the vacuity u, how little evidence the voxel holds (dempster mass u "
+              "= C / S, 1 without evidence; sbki/ebs Dirichlet variance of the label). It does "
+              "not say whether the label is right: use error_probability.")
       .def_ro("conflict", &QueryResult::conflict, kShared,
               "(N,) float32 in [0, 1): share of the fused evidence that disagreed "
               "(VoxelOpinion::conflict).")
       .def_ro("error_probability", &QueryResult::error_probability, kShared,
-              "(N,) float32: the map's probability that the label is wrong: the calibration's "
-              "error model when one is applied, else 1 - max_c p_c (dempster p = belief + u / C).")
+              "(N,) float32: the error probability, the map's probability that the label is "
+              "wrong: the calibration's error model when one is applied (apply_calibration), "
+              "else 1 - max_c p_c (dempster p = belief + u / C). Trust a label by it.")
       .def_ro("occupied", &QueryResult::occupied, kShared,
               "(N,) bool: the voxel is known and occupied.")
       .def_ro("known", &QueryResult::known, kShared, "(N,) bool: the voxel has been observed.");
@@ -120,10 +123,11 @@ void bindResults(nb::module_& m) {
       .def_ro("sizes", &Leaves::sizes, kShared, "(M,) float32 edge length [m].")
       .def_ro("occupancy", &Leaves::occupancy, kShared, "(M,) float32 occupancy probability.")
       .def_ro("labels", &Leaves::labels, kShared, "(M,) int32 argmax class, -1 without evidence.")
-      .def_ro("uncertainty", &Leaves::uncertainty, kShared, "(M,) float32.")
+      .def_ro("uncertainty", &Leaves::uncertainty, kShared,
+              "(M,) float32: the vacuity u (as QueryResult's).")
       .def_ro("conflict", &Leaves::conflict, kShared, "(M,) float32.")
       .def_ro("error_probability", &Leaves::error_probability, kShared,
-              "(M,) float32: the probability that the label is wrong (as QueryResult's).")
+              "(M,) float32: the error probability, that the label is wrong (as QueryResult's).")
       .def_ro("belief", &Leaves::belief, kShared, "(M, C) float32.");
   nb::class_<InsertStats>(m, "InsertStats", "What one insert_scan did.")
       .def_ro("points_in", &InsertStats::points_in)
@@ -325,7 +329,10 @@ void bindTree(nb::module_& m) {
       .def(
           "query",
           [](const EvidentialOcTree& tree, const PointsIn& points) { return query(tree, points); },
-          nb::arg("points"), "Opinion and occupancy of each point's voxel.")
+          nb::arg("points"),
+          "Opinion and occupancy of each point's voxel: labels, error_probability (the "
+          "probability that the label is wrong; trust a label by it), belief, uncertainty (the "
+          "vacuity u), conflict, occupied, known.")
       .def("leaves", &leaves, nb::arg("occupied_only") = false, "Every leaf as arrays.")
       // --- files and maps
       .def(
@@ -366,8 +373,8 @@ void bindTree(nb::module_& m) {
             return toColorOcTree(t, classes, colorModeFromName(mode));
           },
           nb::arg("classes"), nb::arg("mode") = "class",
-          "ColorOcTree coloured by class ('class'), the probability that the label is wrong "
-          "('uncertainty', 1 - max p) or the vacuity u ('vacuity').")
+          "ColorOcTree coloured by class ('class'), the error probability ('uncertainty': the "
+          "probability that the label is wrong) or the vacuity u ('vacuity').")
       .def("copy", [](const Tree& t) { return std::make_unique<Tree>(t); })
       .def("__copy__", [](const Tree& t) { return std::make_unique<Tree>(t); })
       .def("clear", &Tree::clear)

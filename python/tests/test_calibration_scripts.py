@@ -1,5 +1,5 @@
-"""scripts/calibration/: the numpy read-out and metrics with which select_cap.py sweeps caps over
-one stored map (collect_log_evidence.py reads its log-evidence back) agree with the CLI's `eval`
+"""docs/experiments/drivers/calibration/: the numpy read-out and metrics with which select_cap.py
+sweeps caps over one stored map (collect_log_evidence.py reads its log-evidence back) agree with the CLI's `eval`
 of that map at the same cap, on a tiny generated (SYNTHETIC) sequence."""
 import json
 import subprocess
@@ -10,7 +10,7 @@ import pytest
 from conftest import REPO
 from test_kitti import cli_binary
 
-sys.path.insert(0, str(REPO / "scripts" / "calibration"))
+sys.path.insert(0, str(REPO / "docs" / "experiments" / "drivers" / "calibration"))
 import collect_log_evidence  # noqa: E402
 import select_cap  # noqa: E402
 

@@ -3,7 +3,7 @@
 
     neighbour_weights.py [SIGMA0 ...]      (default: 1 0.7)
 
-Prints the Markdown table of docs/results.md ("How dempster and ebs weigh a neighbour") from
+Prints the Markdown table of docs/experiments/results.md ("How dempster and ebs weigh a neighbour") from
 the formulas of docs/design.md: the sparse kernel k = sigma0 k'(d / L) with the default support
 L = l beta e (l = 0.3 m, beta = 1), distances measured to the neighbour voxel's cube; ebs adds
 k p (linear in k); dempster adds log1p(k b / (1 - k (1 - u))) for the point's class (b = 1 - u).

@@ -13,7 +13,8 @@ BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 
 
 def row(name, m):
-    auroc = m["error_detection"]["u"]["auroc"] if "error_detection" in m else float("nan")
+    detection = m.get("error_detection", {}).get("error_probability")
+    auroc = detection["auroc"] if detection else float("nan")
     return "| %s | %.1f | %.1f | %.4f | %.4f | %.3f |" % (
         name, 100 * m["miou_all_queries"], 100 * m["acc_all_queries"], m["brier"], m["ece"], auroc)
 
@@ -21,8 +22,9 @@ def row(name, m):
 def table(metrics, commit, date):
     rule = metrics["parameters"]["rule"]
     lines = [
-        "| %s GT-labelled points of the 10 bundled SemanticKITTI 08 scans | mIoU %% | Acc %% | Brier "
-        "| ECE | AUROC of u for errors |" % format(metrics["map"]["queries"], ","),
+        "| %s GT-labelled points of the 10 bundled SemanticKITTI 08 scans | mIoU %% | Acc %% "
+        "| Brier | ECE | AUROC of the error probability for wrong labels |"
+        % format(metrics["map"]["queries"], ","),
         "|---|---|---|---|---|---|",
         row(metrics["input"]["description"], metrics["input"]),
         row("**map** (`%s`, the defaults)" % rule, metrics["map"]),

@@ -147,7 +147,7 @@ LearnedEvidenceModel LearnedEvidenceModel::load(const std::string& path) {
   if (names != pointFeatureNames(m.num_classes_)) {
     r.fail(
         "its features are not this build's point features (trained with another version of "
-        "point_features.cpp?); retrain with scripts/learned_evidence/train.py");
+        "point_features.cpp?); retrain with docs/experiments/drivers/learned_evidence/train.py");
   }
   r.expect("description");
   m.description_ = r.restOfLine();

@@ -31,7 +31,7 @@ TopDownGrid makeGrid(const EvidentialOcTree& tree, const std::vector<Query>* que
 cv::Mat renderSemantic(const EvidentialOcTree& tree, const ClassTable& classes,
                        const TopDownGrid& grid, const std::vector<std::string>& caption);
 // The map's probability that each drawn voxel's label is wrong, 1 - max_c p_c
-// (FusionRule::errorProbability, the default uncertainty: docs/results.md).
+// (FusionRule::errorProbability, the default uncertainty: docs/experiments/results.md).
 cv::Mat renderUncertainty(const EvidentialOcTree& tree, const TopDownGrid& grid,
                           const std::vector<std::string>& caption);
 cv::Mat renderError(const EvidentialOcTree& tree, const std::vector<Query>& queries,

@@ -46,7 +46,7 @@ void sendLater(StaleOutput* output, Message message, const ros::Time& time, Outb
 }
 
 std::string uncertaintyName(const EvidentialOcTree& tree, UncertaintyView view) {
-  if (view == UncertaintyView::kErrorProbability) return "P(label wrong)";  // 1 - max p
+  if (view == UncertaintyView::kErrorProbability) return "error probability";  // P(label wrong)
   return tree.rule().uncertaintyIsMass() ? "vacuity u" : "uncertainty (Dirichlet var.)";
 }
 

@@ -15,8 +15,9 @@
 namespace evidential_octomap {
 
 // What the uncertainty view colours (~uncertainty_view): the map's probability that a voxel's
-// label is wrong (1 - max_c p_c, the default: it detects wrong labels best, docs/results.md), or
-// the vacuity u (how little evidence the voxel holds; sbki/ebs: the Dirichlet variance).
+// label is wrong (1 - max_c p_c, the default: it detects wrong labels best,
+// docs/experiments/results.md), or the vacuity u (how little evidence the voxel holds; sbki/ebs:
+// the Dirichlet variance).
 enum class UncertaintyView { kErrorProbability, kVacuity };
 // "error_probability" or "vacuity"; throws std::invalid_argument naming both otherwise.
 UncertaintyView uncertaintyViewFromName(const std::string& name);

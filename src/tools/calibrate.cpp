@@ -4,8 +4,8 @@
 // read_calibration read. Two fits, on the scans mapped as `map` maps them:
 //   the read-out cap (SemanticConfig::evidence_cap): the cap of lowest Brier score on their GT
 //     points (golden-section search over ln cap). A fit on a few scans can be noise
-//     (docs/results_calibrate.md), so the file keeps the adaptive cap (-1) unless the fitted
-//     one is better beyond the 95 % paired-bootstrap interval over 10 m blocks (--keep-fit
+//     (docs/experiments/results_calibrate.md), so the file keeps the adaptive cap (-1) unless the
+//     fitted one is better beyond the 95 % paired-bootstrap interval over 10 m blocks (--keep-fit
 //     writes it regardless);
 //   the error model (error_model.h): P(label wrong) from everything the voxel holds, on the
 //     queries of two maps (every scan mapped and queried; the odd scans mapped, the even ones

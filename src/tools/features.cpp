@@ -1,6 +1,6 @@
 // `evidential_octomap features`: dump the learned evidence head's per-point features
 // (point_features.h) of every scan as .npy, with GT and predictions, for the training script
-// scripts/learned_evidence/train.py. One feature implementation: this one.
+// docs/experiments/drivers/learned_evidence/train.py. One feature implementation: this one.
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>

@@ -31,7 +31,7 @@ void runInfo(const std::string& path) {
             << "resolution:      " << tree->getResolution() << " m\n"
             << "classes (C):     " << tree->numClasses() << "\n"
             << "rule:            " << tree->rule().name()
-            << (tree->rule().uncertaintyIsMass() ? " (uncertainty is a mass in [0,1])"
+            << (tree->rule().uncertaintyIsMass() ? " (vacuity u: a mass in [0,1])"
                                                  : " (uncertainty: Dirichlet variance)")
             << "\n"
             << "nodes:           " << tree->size() << " (" << leaves << " leaves: " << occupied

@@ -107,8 +107,8 @@ void runMap(const MapOptions& o) {
     writePng(o.out + "/uncertainty.png",
              renderUncertainty(*run.tree, grid,
                                caption(run.tree->errorModel()
-                                           ? "P(label wrong), calibrated error model"
-                                           : "P(label wrong) = 1 - max p (uncalibrated)")));
+                                           ? "error probability, calibrated error model"
+                                           : "error probability = 1 - max p (uncalibrated)")));
     writePng(o.out + "/error.png",
              renderError(*run.tree, queries, grid, caption("errors of the GT queries")));
     writePng(o.out + "/quality.png",

@@ -2,7 +2,8 @@
 // that includes zeros and huge values. Afterwards (and along the way) every voxel reads out
 // finite, with |sum(b) + u - 1| <= 1e-5, and memory stays bounded.
 //   test_soak [--scans N] [--points P] [--classes C] [gtest flags]
-// ctest runs 300 scans; the full soak is `test_soak --scans 10000` (docs/reliability.md).
+// ctest runs 300 scans; the full soak is `test_soak --scans 10000`
+// (docs/experiments/reliability.md).
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -105,7 +105,7 @@ TEST_F(Calibrate, MapAndEvalReadTheFileItWrites) {
 // A fit on a few scans can be noise: the file holds it only when its Brier score is lower than
 // the adaptive cap's beyond the 95 % interval, else -1, which every reader takes as the adaptive
 // cap. The tiny x5 sequence's fit is within its interval; two bundled scans with derived one-hot
-// evidence need a much lower cap than the adaptive one (docs/results_calibrate.md).
+// evidence need a much lower cap than the adaptive one (docs/experiments/results_calibrate.md).
 TEST_F(Calibrate, TheFileKeepsTheAdaptiveCapUnlessTheFitIsBetterBeyondItsInterval) {
   const std::string dir = dataset("x5", kOverconfidentX5);
   const Fit within = calibrate(dir, "--no-error-model");

@@ -1,7 +1,7 @@
 // Learned evidence: a small evidential MLP (Sensoy et al. 2018 loss, trained by
-// scripts/learned_evidence/train.py) that turns the per-point features of point_features.h
-// into a C-vector of evidence e >= 0 (softplus output), so data that ships only a network's hard
-// predictions gets evidence whose uncertainty follows real error structure.
+// docs/experiments/drivers/learned_evidence/train.py) that turns the per-point features of
+// point_features.h into a C-vector of evidence e >= 0 (softplus output), so data that ships only a
+// network's hard predictions gets evidence whose uncertainty follows real error structure.
 //
 // A model file holds one or more *folds*, each trained on some scans (stored by content
 // fingerprint). A scan's evidence comes only from the folds that were NOT trained on it

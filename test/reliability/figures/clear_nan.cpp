@@ -1,5 +1,5 @@
 // Issue 16 item 3 before/after: clearBox with a NaN corner on a map of a wall
-// (docs/reliability.md).
+// (docs/experiments/reliability.md).
 #include <cmath>
 #include <iostream>
 #include <stdexcept>

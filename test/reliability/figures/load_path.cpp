@@ -1,4 +1,4 @@
-// loadMap(path): what it answers and how long it takes (docs/reliability.md).
+// loadMap(path): what it answers and how long it takes (docs/experiments/reliability.md).
 #include <chrono>
 #include <iostream>
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The before/after figures of docs/reliability.md:
+# The before/after figures of docs/experiments/reliability.md:
 # builds the core library of a commit (git archive, plain CMake, Release) and the small programs
 # here against it, then runs them. OLD=1 (-DOLD_WRITERS) selects the code paths that commit had
 # before the fixes (export writing in place, clearBox in src/ros, payload += float(increment)).

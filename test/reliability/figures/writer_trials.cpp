@@ -1,5 +1,5 @@
-// Before/after figures of concurrent writers (docs/reliability.md). Built against the library of a
-// given commit; OLD_WRITERS selects the writers main had before the fix.
+// Before/after figures of concurrent writers (docs/experiments/reliability.md). Built against the
+// library of a given commit; OLD_WRITERS selects the writers main had before the fix.
 //   writer_trials threads DIR      10 rounds of two threads x 10 saveMap of one path, a load after
 //   each writer_trials export DIR N     N kill -9 during a ColorOcTree export of a map
 //   writer_trials temps DIR N      N kill -9 during saveMap, then one save: temporaries left

@@ -1,0 +1,206 @@
+#!/usr/bin/env python3
+"""The figures the user guides quote from the experiment records, generated from the records.
+
+A guide holds a block
+    <!-- generated: figures KEY -->
+    ...
+    <!-- end -->
+whose body this script writes from the record named in FIGURES[KEY], so a figure in a guide is
+never copied by hand and changes when its record is regenerated.
+
+    python3 scripts/docs/figures.py           # rewrite every block
+    python3 scripts/docs/figures.py --check   # exit 1 when a block is not what its record gives
+"""
+import json
+import os
+import re
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import doc_pages  # noqa: E402
+import experiments_index  # noqa: E402
+
+BLOCK = re.compile(r"(<!-- generated: figures (\w+) -->\n)(.*?)(<!-- end -->)", re.S)
+
+
+class MissingFigure(Exception):
+    pass
+
+
+def find(pattern, text, what):
+    """The groups of `pattern` in `text` (whitespace-normalised); a record that lost the figure
+    is an error that names it, so the guide cannot silently keep an old number."""
+    m = re.search(pattern, " ".join(text.split()))
+    if not m:
+        raise MissingFigure("%s: no %r" % (what, pattern))
+    return m.groups()
+
+
+def record(name):
+    path = os.path.join(doc_pages.RECORDS, name)
+    text = doc_pages.read(path)
+    _, _, commit, date = experiments_index.stamp(text)
+    return text, "[%s](%s)" % (name, "experiments/" + name), commit, date
+
+
+def row(text, first_cell, what):
+    """The cells of the table row whose first cell is `first_cell`."""
+    for line in text.split("\n"):
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if cells and cells[0].replace("*", "") == first_cell:
+            return [c.replace("*", "") for c in cells]
+    raise MissingFigure("%s: no row %r" % (what, first_cell))
+
+
+def live_rate():
+    text, link, _, _ = record("live_profile.md")
+    rate, received, seconds, median, date, commit = find(
+        r"\*\*([\d.]+) clouds inserted a second\*\* of ([\d.]+) received, none dropped in (\d+) s, "
+        r"median insert \*\*([\d.]+) ms\*\*", text, "live_profile.md") + find(
+        r"(20\d\d-\d\d-\d\d) [\d:]+ UTC, commit ([0-9a-f]{7})\): \*\*[\d.]+ clouds inserted",
+        text, "live_profile.md")
+    return ("The node with the live profile, fed the bundled scans at 10 Hz on 2 cores, inserted "
+            "**%s clouds a second** of %s received, none dropped in %s s (median insert %s ms; "
+            "%s, commit %s, %s)." % (rate, received, seconds, median, link, commit, date))
+
+
+def ros2_rate():
+    text, link, commit, date = record("ros2.md")
+    received, inserted = find(r"(\d+) of \d+ clouds received, \*\*(\d+) inserted\*\*", text,
+                              "ros2.md")
+    return ("At 10 Hz with the live profile the ROS 2 node inserted %s of %s clouds and "
+            "counted the rest as dropped (%s, commit %s, %s)." % (inserted, received, link,
+                                                                  commit, date))
+
+
+def clearing_ghosts():
+    text, link, commit, date = record("clearing_observations.md")
+    on, = find(r"\*\*([\d.]+ %)\*\* of the freed swept volume still answers `person`", text,
+               "clearing_observations.md")
+    off, = find(r"with the mode off (over [\d.]+ %) still answer `person`", text,
+                "clearing_observations.md")
+    return ("On the synthetic street, %s of the volume the person freed still answers `person` "
+            "with K = 3 or 5, against %s with the mode off (%s, commit %s, %s)." % (
+                on, off, link, commit, date))
+
+
+def local_map_memory():
+    text, link, commit, date = record("local_map.md")
+    local = row(text, "semantic insert, LocalMap radius 60 m (tiles on disk)", "local_map.md")
+    whole = row(text, "semantic insert, whole map in memory", "local_map.md")
+    return ("On a synthetic 1 km sequence the resident memory at the end was %s with a 60 m "
+            "local map against %s with the whole map in memory; the global map merged from the "
+            "tiles equals the whole map (%s, commit %s, %s)." % (local[4], whole[4], link, commit,
+                                                                 date))
+
+
+def error_model():
+    text, link, commit, date = record("results_error_model.md")
+    sections, ranked = find(r"Targets met, of (\d+) sections: .*? AUROC of the error probability "
+                            r"≥ every output of every rule in (\d+)\.", text,
+                            "results_error_model.md")
+    kitti = row(text, "semantickitti_08_first10", "results_error_model.md")
+    return ("The calibrated error probability ranked the map's wrong labels better than every "
+            "output of every rule in %s of %s datasets and protocols; on the bundled scans "
+            "(learned evidence, held-out) its AUROC was %s (1 − max p → calibrated) (%s, "
+            "commit %s, %s)." % (ranked, sections, kitti[7], link, commit, date))
+
+
+def learned_heldout():
+    text, link, commit, date = record("learned_evidence.md")
+    learned = row(text, "learned (cross-fitted)", "learned_evidence.md")
+    hard = row(text, "network's hard predictions (p = one-hot)", "learned_evidence.md")
+    return ("Per point, held out: accuracy %s %% against the network's %s %%, mIoU %s %% "
+            "against %s %%, and an AUROC of u for wrong labels of %s (%s, commit %s, %s)." % (
+                learned[1], hard[1], learned[2], hard[2], learned[6], link, commit, date))
+
+
+def speed():
+    _, link, commit, date = record("benchmarks.md")
+    path = os.path.join(doc_pages.ROOT, "bench", "results", "benchmarks.json")
+    s = json.load(open(path))["summary"]
+    key = "cpu_ratio_%s_vs_plain_r50_steady"
+    if key % "live" not in s or key % "exact" not in s:
+        raise MissingFigure("bench/results/benchmarks.json: no %s or %s" % (key % "live",
+                                                                            key % "exact"))
+    return ("In a map that already knows the area, an insert costs %.2f× plain OctoMap's CPU "
+            "with the library defaults and %.2f× with the live launch's settings (50 m, "
+            "2 threads; %s, commit %s, %s)." % (s[key % "exact"], s[key % "live"], link,
+                                                 commit, date))
+
+
+def cutoff():
+    text, link, commit, date = record("cutoff.md")
+    cut, share, rate = find(r"Recommended cut-off: error probability < ([\d.]+): it keeps "
+                            r"([\d.]+ %) of the labelled queries, of which ([\d.]+ %) are wrong",
+                            text, "cutoff.md")
+    return ("Trust a label when its error probability is below **%s**: on the bundled scans "
+            "(held-out) that keeps %s of the labelled queries, of which %s are wrong (%s, "
+            "commit %s, %s)." % (cut, share, rate, link, commit, date))
+
+
+def merge_equality():
+    text, link, commit, date = record("python.md")
+    exact = row(text, "10 x 1, in order (sequential)", "python.md")
+    plain = row(text, "10 x 1, plain (sequential)", "python.md")
+    return ("Ten one-scan chunks of the bundled scans merged in order: %s query labels differ "
+            "from the sequential map (beliefs to %s); merged without the unplaced evidence, %s "
+            "do (%s, commit %s, %s)." % (exact[1], exact[2], plain[1], link, commit, date))
+
+
+def data_presets():
+    text, link, commit, date = record("data.md")
+    good, poor = row(text, "good", "data.md"), row(text, "poor", "data.md")
+    return ("Per point on a forest sequence, the `good` preset's network is right %s of the time "
+            "(AUROC of u for its errors %s), the `poor` one's %s (%s) (%s, commit %s, %s)." % (
+                good[2], good[3], poor[2], poor[3], link, commit, date))
+
+
+FIGURES = {f.__name__: f for f in (live_rate, ros2_rate, clearing_ghosts, local_map_memory,
+                                   error_model, learned_heldout, speed, cutoff, merge_equality,
+                                   data_presets)}
+
+
+def render(text, page):
+    """The page with every block's body regenerated, its links relative to the page."""
+    records = os.path.relpath(os.path.join("docs", "experiments"), os.path.dirname(page) or ".")
+
+    def body(m):
+        key = m.group(2)
+        if key not in FIGURES:
+            raise MissingFigure("no figure %r (scripts/docs/figures.py FIGURES)" % key)
+        figure = FIGURES[key]().replace("](experiments/", "](%s/" % records)
+        return m.group(1) + figure + "\n" + m.group(4)
+    return BLOCK.sub(body, text)
+
+
+def stale_pages(root=doc_pages.ROOT):
+    """(page, reason) of every user page whose blocks differ from what the records give."""
+    out = []
+    for page in doc_pages.user_pages(root):
+        text = doc_pages.read(page, root)
+        try:
+            if render(text, page) != text:
+                out.append((page, "a figures block is not current"))
+        except MissingFigure as e:
+            out.append((page, str(e)))
+    return out
+
+
+def main():
+    if sys.argv[1:] == ["--check"]:
+        stale = stale_pages()
+        for page, why in stale:
+            print("%s: %s" % (page, why))
+        sys.exit(1 if stale else 0)
+    for page in doc_pages.user_pages():
+        text = doc_pages.read(page)
+        new = render(text, page)
+        if new != text:
+            with open(os.path.join(doc_pages.ROOT, page), "w", encoding="utf-8") as f:
+                f.write(new)
+            print("wrote %s" % page)
+
+
+if __name__ == "__main__":
+    main()
