@@ -27,7 +27,8 @@ OneHotTable::OneHotTable(double sigma0, float evidence, int num_classes, double 
     const double k = std::min(weight * sparseKernel(r, 1.0, sigma0), 1.0);
     values[i] = std::log1p(evidence * k / (strength * (1.0 - k) + k * num_classes));
   }
-  for (int i = 0; i < KernelTable::kSteps; ++i) steps_[i] = {values[i], values[i + 1] - values[i]};
+  for (int i = 0; i < KernelTable::kSteps; ++i)
+    steps_[i] = {float(values[i]), float(values[i + 1] - values[i])};
 }
 
 KernelPass::KernelPass(const SemanticConfig& config, const EvidentialOcTree& tree)
@@ -333,11 +334,9 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
 }
 
 // The axis terms of one member of a group, d^2 per axis offset from the group's first point
-// (as scatterWith's, +inf beyond the member's reach), and its x interval on the line at hand.
+// (as scatterWith's, +inf beyond the member's reach).
 struct MemberTerms {
   const double* axis[3];  // indexed by the offset from the group's first point
-  int nearest_x;          // the x offset of its smallest x term within the subtree
-  int first_x, last_x;    // its interval on the last line
   double syz;             // its y + z term on the line at hand
 };
 
@@ -383,8 +382,6 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
         axis[o] = gap * gap * inv_length2;
       }
     }
-    t.nearest_x = std::clamp(int(point.key[0]) - int(ref[0]), lo[0], hi[0]);
-    t.first_x = t.last_x = t.nearest_x;
   }
   // The members share a class and an evidence value: one table (two when class-aware).
   const int cls = group[0].point->opinion.argmax;
@@ -403,38 +400,19 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
   for (int oz = lo[2]; oz <= hi[2]; ++oz) {
     for (int oy = lo[1]; oy <= hi[1]; ++oy) {
       const uint32_t line = uint32_t((z0 + oz) << kSubtreeLevels | (y0 + oy));
-      const uint64_t kept = out->masked ? out->mask[line] & reachable : ~uint64_t(0);
+      const uint64_t kept = (out->masked ? out->mask[line] : ~uint64_t(0)) & reachable;
       if (!kept) continue;
-      // Each member's interval as scatterWith finds it; the group's voxels are their union.
-      int members = 0, first = hi[0] + 1, last = lo[0] - 1;
+      // The members whose support crosses this line; every kept voxel of the group's reach on
+      // it is summed over them without a branch (its table gives 0 beyond a support), which
+      // costs less than finding each member's interval on each line.
+      int members = 0;
       for (int i = 0; i < n; ++i) {
         MemberTerms& t = terms[i];
         t.syz = t.axis[2][oz] + t.axis[1][oy];
-        if (t.syz >= 1.0) continue;
-        const auto inside = [&](int o) { return t.axis[0][o] + t.syz < 1.0 + 1e-9; };
-        if (!inside(t.nearest_x)) continue;
-        int a = std::min(t.first_x, t.nearest_x), b = std::max(t.last_x, t.nearest_x);
-        if (inside(a)) {
-          while (a > lo[0] && inside(a - 1)) --a;
-        } else {
-          while (!inside(a)) ++a;
-        }
-        if (inside(b)) {
-          while (b < hi[0] && inside(b + 1)) ++b;
-        } else {
-          while (!inside(b)) --b;
-        }
-        t.first_x = a;
-        t.last_x = b;
-        first = std::min(first, a);
-        last = std::max(last, b);
-        on_line[members++] = i;
+        if (t.syz < 1.0) on_line[members++] = i;
       }
       if (!members) continue;
-      const int width_x = last - first + 1;
-      const uint64_t interval = (width_x >= 64 ? ~uint64_t(0) : (uint64_t(1) << width_x) - 1)
-                                << (x0 + first);
-      uint64_t voxels = interval & kept;
+      uint64_t voxels = kept;
       while (voxels) {
         const int ox = __builtin_ctzll(voxels) - x0;
         voxels &= voxels - 1;

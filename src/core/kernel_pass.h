@@ -66,12 +66,12 @@ class OneHotTable {
   double operator()(double s) const {
     const double x = std::min(s, 1.0) * KernelTable::kSteps;
     const int i = static_cast<int>(x);
-    return steps_[i].value + (x - i) * steps_[i].slope;
+    return double(steps_[i].value) + (x - i) * double(steps_[i].slope);
   }
 
  private:
   struct Step {
-    double value, slope;  // at step i, and to step i + 1
+    float value, slope;  // at step i, and to step i + 1: 32 KB, in the L1 cache
   };
   float evidence_;
   std::vector<Step> steps_;  // kSteps + 1: the last is 0, 0
