@@ -178,6 +178,8 @@ void KernelPass::markClasses(const KernelPoint& point, const octomap::OcTreeKey&
 // another class (a network's noise) does not keep its neighbours' evidence out, a thin object's
 // few points do. (Shell voxels see only part of their neighbours, but no point scatters there.)
 void KernelPass::holdClasses(KernelRows* rows) {
+  constexpr int kSize = 1 << kSubtreeLevels;
+  if (rows->weaker_lines.empty()) rows->weaker_lines.resize(size_t(kSize) * kSize, 0);
   const std::vector<uint64_t>& seen = rows->classes;
   for (uint32_t local : rows->classes_touched) {
     const int x = int(local % kPadded), y = int(local / kPadded % kPadded),
@@ -191,13 +193,19 @@ void KernelPass::holdClasses(KernelRows* rows) {
         }
     const bool holds = rows->classes_weaker[local] || (seen[local] & beside);
     rows->classes_weaker[local] = holds ? ~seen[local] : 0;
+    if (!holds || x == 0 || y == 0 || z == 0 || x > kSize || y > kSize || z > kSize) continue;
+    rows->weaker_lines[size_t(z - 1) * kSize + (y - 1)] |= uint64_t(1) << (x - 1);
   }
 }
 
 void KernelPass::clearClasses(KernelRows* rows) {
+  constexpr int kSize = 1 << kSubtreeLevels;
   for (uint32_t local : rows->classes_touched) {
     rows->classes[local] = 0;
     rows->classes_weaker[local] = 0;
+    const int y = int(local / kPadded % kPadded), z = int(local / (kPadded * kPadded));
+    if (y >= 1 && z >= 1 && y <= kSize && z <= kSize)
+      rows->weaker_lines[size_t(z - 1) * kSize + (y - 1)] = 0;
   }
   rows->classes_touched.clear();
 }
@@ -312,7 +320,7 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
         voxels &= voxels - 1;
         const uint32_t local = line << kSubtreeLevels | uint32_t(x0 + ox);
         double weight = 1.0;
-        if (weigh_others) {
+        if (weigh_others && (out->weaker_lines[line] >> (x0 + ox) & 1)) {
           if (out->classes_weaker[paddedIndex(x0 + ox, y0 + oy, z0 + oz)] & own_class) {
             if (other_class_weight_ <= 0.0) continue;
             weight = other_class_weight_;
@@ -412,12 +420,13 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
         if (t.syz < 1.0) on_line[members++] = i;
       }
       if (!members) continue;
+      const uint64_t weaker_line = own_class ? out->weaker_lines[line] : 0;
       uint64_t voxels = kept;
       while (voxels) {
         const int ox = __builtin_ctzll(voxels) - x0;
         voxels &= voxels - 1;
         const OneHotTable* table = &full;
-        if (own_class &&
+        if ((weaker_line >> (x0 + ox) & 1) &&
             (out->classes_weaker[paddedIndex(x0 + ox, y0 + oy, z0 + oz)] & own_class)) {
           if (other_class_weight_ <= 0.0) continue;
           table = &weaker_table;

@@ -114,6 +114,9 @@ struct KernelRows {
   std::vector<uint64_t> classes;
   std::vector<uint64_t> classes_weaker;
   std::vector<uint32_t> classes_touched;
+  // Per line of the subtree (as `mask`), the voxels whose classes_weaker is not 0: the loop
+  // reads one word a line instead of the large padded array at every voxel.
+  std::vector<uint64_t> weaker_lines;
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
 };
 
