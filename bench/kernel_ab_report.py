@@ -9,6 +9,7 @@ import argparse
 import csv
 import datetime
 import os
+import re
 import statistics
 import subprocess
 from collections import defaultdict
@@ -81,6 +82,29 @@ def main():
                       f"| {ratio(rows, method, 'wall_ms', steady):.3f} "
                       f"| {median(rows, method, 'cpu_ms', steady):.1f} | {stages} |")
         print(f"\nFirst: inserts {first[0]}–{first[1] - 1}; steady: {steady[0]}–{steady[1] - 1}.\n")
+    for method in ("exact", "live"):
+        path = os.path.join(args.out, f"map_diff_{method}.txt")
+        if os.path.exists(path):
+            print(f"## The maps of the two builds, {LABELS[method]}\n")
+            print("After the 30 inserts of the revisit, every leaf of each map looked up in the "
+                  "other (`evidential_map_diff before.ot after.ot`):\n")
+            print("```")
+            with open(path) as f:
+                print(f.read().rstrip())
+            print("```\n")
+    for which in ("before", "after"):
+        path = os.path.join(args.out, f"prof_{which}", "profile.md")
+        if not os.path.exists(path):
+            continue
+        with open(path) as f:
+            lines = f.read().splitlines()
+        load = re.search(r"load average ([0-9. ]+) before", " ".join(lines))
+        print(f"## Profile, {which}\n")
+        print("`scripts/bench_profile.sh` (`perf record -F 499`, the exact insert alone, 30 inserts "
+              f"of the revisit), load average {load.group(1).strip() if load else '?'} before. "
+              "Self time of each function, share of all samples:\n")
+        print("\n".join(lines[lines.index("| share | function |"):]))
+        print()
     print("## Runs\n")
     print("```")
     for line in meta_lines(args.out):

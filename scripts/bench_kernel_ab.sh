@@ -3,11 +3,12 @@
 # defaults) and the live launch's settings, interleaved in one process, for two builds of
 # evidential_sequence_bench run one after the other, on the bundled scans forth and back
 # (revisit, 30 inserts: first pass 0-9, steady state 10-29) and on a SYNTHETIC generated
-# off-road sequence (os1-64 forest, 40 scans, each once: first 10, then 10-39). Writes the CSV
-# files and meta.txt (commits, load average, commands) into OUT, then
+# off-road sequence (os1-64 forest, 40 scans, each once: first 10, then 10-39), how the two
+# builds' maps differ (evidential_map_diff), the perf profile of each (scripts/bench_profile.sh);
+# CSV files and meta.txt (commits, load average, commands) into OUT, then
 # docs/experiments/kernel_one_hot.md with bench/kernel_ab_report.py.
 #
-#   scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT   # ~15 min at load 9 on 2 cores
+#   scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT   # ~20 min at load 13 on 2 cores
 # Outside CI; CLI (for generating the sequence): EVIDENTIAL_OCTOMAP_CLI or build/core's.
 set -euo pipefail
 
@@ -47,6 +48,24 @@ for which in before after; do
   [[ "${which}" == after ]] && bin="${after}"
   run "revisit_${which}" "${bin}" "${kitti[@]}"
   run "offroad_${which}" "${bin}" "${forest[@]}"
+done
+# The maps of both builds after the 30 inserts, leaf by leaf (evidential_map_diff beside AFTER).
+for method in exact live; do
+  for which in before after; do
+    bin="${before}"
+    [[ "${which}" == after ]] && bin="${after}"
+    run "save_${method}_${which}" "${bin}" "${kitti[@]}" --only "${method}" \
+      --save "${out}/${method}_${which}.ot"
+  done
+  meta "map_diff_${method}: evidential_map_diff ${method}_before.ot ${method}_after.ot"
+  "$(dirname "${after}")/evidential_map_diff" "${out}/${method}_before.ot" \
+    "${out}/${method}_after.ot" >"${out}/map_diff_${method}.txt"
+done
+for which in before after; do
+  bin="${before}"
+  [[ "${which}" == after ]] && bin="${after}"
+  meta "profile_${which}: scripts/bench_profile.sh, start $(date -u '+%Y-%m-%d %H:%M UTC'), load $(load)"
+  bash "${root}/scripts/bench_profile.sh" "${bin}" "${out}/prof_${which}" >/dev/null
 done
 python3 "${root}/bench/kernel_ab_report.py" "${out}" \
   --command "scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT" \
