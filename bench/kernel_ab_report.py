@@ -81,7 +81,8 @@ def main():
                       f"| {ratio(rows, method, 'cpu_ms', steady):.3f} "
                       f"| {ratio(rows, method, 'wall_ms', steady):.3f} "
                       f"| {median(rows, method, 'cpu_ms', steady):.1f} | {stages} |")
-        print(f"\nFirst: inserts {first[0]}–{first[1] - 1}; steady: {steady[0]}–{steady[1] - 1}.\n")
+        print(f"\nFirst: inserts {first[0]}–{first[1] - 1}; "
+              f"steady: {steady[0]}–{steady[1] - 1}.\n")
     for method in ("exact", "live"):
         path = os.path.join(args.out, f"map_diff_{method}.txt")
         if os.path.exists(path):
@@ -100,8 +101,9 @@ def main():
             lines = f.read().splitlines()
         load = re.search(r"load average ([0-9. ]+) before", " ".join(lines))
         print(f"## Profile, {which}\n")
-        print("`scripts/bench_profile.sh` (`perf record -F 499`, the exact insert alone, 30 inserts "
-              f"of the revisit), load average {load.group(1).strip() if load else '?'} before. "
+        print("`scripts/bench_profile.sh` (`perf record -F 499`, the exact insert alone, 30 "
+              f"inserts of the revisit), load average {load.group(1).strip() if load else '?'} "
+              "before. "
               "Self time of each function, share of all samples:\n")
         print("\n".join(lines[lines.index("| share | function |"):]))
         print()

@@ -68,8 +68,8 @@ int main(int argc, char** argv) {
         "leaves: %zu in A, %zu in B; A's missing from B %zu, B's missing from A %zu\n"
         "occupancy differs: %zu; payload in one only: %zu\n"
         "max |payload difference|: %.3g (relative %.3g, values > 1e-3)\nlabels differ: %zu\n",
-        ab.leaves, ba.leaves, ab.missing, ba.missing, ab.occupancy, ab.payload_presence,
-        ab.max_abs, ab.max_rel, ab.labels);
+        ab.leaves, ba.leaves, ab.missing, ba.missing, ab.occupancy, ab.payload_presence, ab.max_abs,
+        ab.max_rel, ab.labels);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "evidential_map_diff: %s\n", e.what());

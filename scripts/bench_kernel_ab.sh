@@ -64,7 +64,8 @@ done
 for which in before after; do
   bin="${before}"
   [[ "${which}" == after ]] && bin="${after}"
-  meta "profile_${which}: scripts/bench_profile.sh, start $(date -u '+%Y-%m-%d %H:%M UTC'), load $(load)"
+  meta "profile_${which}: scripts/bench_profile.sh, start $(date -u '+%Y-%m-%d %H:%M UTC')," \
+    "load $(load)"
   bash "${root}/scripts/bench_profile.sh" "${bin}" "${out}/prof_${which}" >/dev/null
 done
 python3 "${root}/bench/kernel_ab_report.py" "${out}" \

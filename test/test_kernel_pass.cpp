@@ -588,7 +588,8 @@ TEST(KernelPass, OneHotRoadStaysWithinTheTableErrorOfTheGeneralLoopOnARealScan) 
   std::ostringstream text;
   text << worst << " (relative " << worst_relative << ")";
   RecordProperty("worst_difference", text.str());
-  RecordProperty("points_grouped_with_the_previous", std::to_string(grouped) + " of " + std::to_string(points.size()));
+  RecordProperty("points_grouped_with_the_previous",
+                 std::to_string(grouped) + " of " + std::to_string(points.size()));
 }
 
 }  // namespace

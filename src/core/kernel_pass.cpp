@@ -101,7 +101,8 @@ void KernelPass::buildOneHotTables(std::vector<KernelPoint>* points) {
   for (const KernelPoint& p : *points) {
     if (p.table != kOneHot) continue;
     const float e = evidenceOf(p);
-    auto v = std::find_if(values.begin(), values.end(), [&](const auto& x) { return x.first == e; });
+    auto v =
+        std::find_if(values.begin(), values.end(), [&](const auto& x) { return x.first == e; });
     if (v != values.end()) {
       ++v->second;
     } else if (values.size() < kMaxValues) {
