@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <cstdint>
+#include <fstream>
 #include <limits>
 #include <map>
 #include <set>
@@ -13,12 +15,15 @@
 #include <tuple>
 #include <vector>
 
+#include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/sparse_kernel.h"
 #include "fast_log1p.h"
 #include "fusion_contributions.h"
 #include "kernel_pass.h"
 #include "random_masses.h"
+#include "semantic_points.h"
+#include "subtree_source.h"
 #include "synthetic_scene.h"
 
 namespace evidential_octomap {
@@ -395,6 +400,196 @@ TEST(DempsterContribution, RowOfManyContributionsEqualsTheSumOfLog1p) {
           << "magnitude " << magnitude << " class " << c;
     }
   }
+}
+
+// A one-hot point's increment tabulated over s = r^2 (OneHotTable) stays within KernelTable's
+// bound carried through the increment: e S / C^2 times kMaxError sigma0 (for sigma0 <= 1, where
+// the tables are used).
+TEST(OneHotTable, StaysWithinItsStatedErrorOfTheClosedForm) {
+  const int num_classes = 20;
+  for (double sigma0 : {0.3, 0.7, 1.0})
+    for (float evidence : {0.01f, 20.0f, 1000.0f, 3e38f})
+      for (double weight : {1.0, 0.75}) {
+        const OneHotTable table(sigma0, evidence, num_classes, weight);
+        const double strength = double(num_classes) + evidence;
+        double worst = 0.0;
+        for (int i = 0; i <= 200000; ++i) {
+          const double r = i / 200000.0 * 1.01;  // past the support too
+          const double k = std::min(weight * sparseKernel(r, 1.0, sigma0), 1.0);
+          const double want =
+              std::log1p(evidence * k / (strength * (1.0 - k) + k * num_classes));
+          worst = std::max(worst, std::fabs(table(r * r) - want));
+        }
+        const double bound =
+            evidence * strength / (num_classes * num_classes) * KernelTable::kMaxError * sigma0;
+        EXPECT_LE(worst, bound) << sigma0 << " " << evidence << " " << weight;
+      }
+}
+
+// Scan 0 of the bundled SemanticKITTI scans in the sensor frame, one-hot evidence x 20 of its
+// predicted classes.
+struct RealScan {
+  ClassTable classes;
+  RawPoints raw;
+  std::vector<octomap::point3d> positions;
+  std::vector<float> evidence;
+};
+
+RealScan loadRealScan() {
+  const std::string root = std::string(EVIDENTIAL_OCTOMAP_SOURCE_DIR) + "/";
+  const std::string folder = root + "data/semantickitti_08_first10/";
+  RealScan scan;
+  scan.classes = ClassTable::load(root + "config/classes_semantickitti.yaml");
+  std::ifstream points(folder + "velodyne/000000.bin", std::ios::binary);
+  std::ifstream labels(folder + "predictions/000000.label", std::ios::binary);
+  float xyzr[4];
+  uint32_t label = 0;
+  const int num_classes = scan.classes.numClasses();
+  while (points.read(reinterpret_cast<char*>(xyzr), sizeof xyzr) &&
+         labels.read(reinterpret_cast<char*>(&label), sizeof label)) {
+    scan.positions.emplace_back(xyzr[0], xyzr[1], xyzr[2]);
+    const size_t at = scan.evidence.size();
+    scan.evidence.resize(at + num_classes, 0.0f);
+    scan.evidence[at + scan.classes.classOfRaw(label)] = 20.0f;
+  }
+  for (size_t i = 0; i < scan.positions.size(); ++i) {
+    scan.raw.positions.push_back(scan.positions[i]);
+    scan.raw.evidence.push_back(&scan.evidence[i * num_classes]);
+  }
+  return scan;
+}
+
+// The finished rows of one subtree, per local voxel, the points scattered as the map does:
+// one-hot points in groups, with their tables; the others (every point when their tables are
+// taken away: the general loop, the reference) one by one.
+std::map<uint32_t, std::vector<double>> subtreeRows(const KernelPass& kernel,
+                                                    const std::vector<KernelPoint>& points,
+                                                    const SemanticPoints& semantic,
+                                                    const octomap::OcTreeKey& base,
+                                                    int num_classes) {
+  KernelRows rows;
+  rows.index.assign(size_t(1) << (3 * kSubtreeLevels), KernelRows::kNone);
+  for (const KernelPoint& p : points) kernel.markClasses(p, base, &rows);
+  KernelPass::holdClasses(&rows);
+  KernelMember group[KernelPass::kMaxGroup];
+  for (size_t j = 0; j < points.size();) {
+    int n = 0;
+    do {
+      group[n++] = {&points[j], &semantic.positions[j]};
+      ++j;
+    } while (n < KernelPass::kMaxGroup && j < points.size() &&
+             KernelPass::sameGroup(points[j - n], points[j]));
+    kernel.scatter(group, n, base, &rows);
+  }
+  KernelPass::clearClasses(&rows);
+  kernel.finishRows(&rows);
+  std::map<uint32_t, std::vector<double>> out;
+  for (size_t r = 0; r < rows.touched.size(); ++r) {
+    out[rows.touched[r]].assign(&rows.rows[r * num_classes], &rows.rows[(r + 1) * num_classes]);
+  }
+  return out;
+}
+
+// How many points' supports (s < 1 a hair wide, as the loop's intervals) reach each local voxel
+// of the subtree at `base`: the contributions its row sums.
+std::vector<int> contributionsPerVoxel(const EvidentialOcTree& tree,
+                                       const std::vector<KernelPoint>& points,
+                                       const SemanticPoints& semantic,
+                                       const octomap::OcTreeKey& base) {
+  const int size = 1 << kSubtreeLevels;
+  const double half = tree.getResolution() / 2.0;
+  std::vector<int> count(size_t(size) * size * size, 0);
+  for (size_t j = 0; j < points.size(); ++j) {
+    const KernelPoint& p = points[j];
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(int(p.key[a]) - p.reach[a], int(base[a])) - int(base[a]);
+      hi[a] = std::min(int(p.key[a]) + p.reach[a], int(base[a]) + size - 1) - int(base[a]);
+    }
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x) {
+          const int local[3] = {x, y, z};
+          double s = 0.0;
+          for (int a = 0; a < 3; ++a) {
+            const double centre = tree.keyToCoord(octomap::key_type(base[a] + local[a]));
+            const double gap = std::max(std::fabs(semantic.positions[j](a) - centre) - half, 0.0);
+            s += gap * gap * (a == 2 ? p.inv_length2_z : p.inv_length2);
+          }
+          if (s < 1.0 + 1e-6) ++count[(size_t(z) * size + y) * size + x];
+        }
+  }
+  return count;
+}
+
+// The one-hot road (tables, groups) against the general per-point loop on a real scan, library
+// defaults (count-cap cells, class-aware weights, ground supports), every voxel of the
+// supports: the same voxels get rows, and each row's log-evidence differs by at most both
+// tables' error per contribution (e S / C^2 kMaxError sigma0 each, KernelTable's carried
+// through the increment) times its contributions, plus rounding.
+TEST(KernelPass, OneHotRoadStaysWithinTheTableErrorOfTheGeneralLoopOnARealScan) {
+  RealScan scan = loadRealScan();
+  const int num_classes = scan.classes.numClasses();
+  SemanticConfig config;
+  config.threads = 2;
+  EvidentialOcTree tree(0.2, num_classes, config);
+  tree.setGroundClasses(scan.classes.ground);
+  KernelPass kernel(config, tree);
+  const PointSelection how = PointSelection::of(config, num_classes, config.effectiveThreshold(),
+                                                tree.getResolution());
+  SemanticScratch scratch;
+  SemanticPoints semantic;
+  InsertStats stats;
+  selectSemanticPoints(scan.raw, how, 2, &scratch, &semantic, &stats);
+  std::vector<KernelPoint> points;
+  kernel.preparePoints(semantic, 2, &points);
+  ASSERT_GT(points.size(), 30000u);
+  std::vector<KernelPoint> general = points;
+  size_t one_hot = 0, grouped = 0;
+  for (size_t j = 0; j < points.size(); ++j) {
+    one_hot += points[j].table >= 0 ? 1 : 0;
+    grouped += j > 0 && KernelPass::sameGroup(points[j - 1], points[j]) ? 1 : 0;
+    general[j].table = -1;
+  }
+  EXPECT_EQ(one_hot, points.size());      // derived evidence: every point one-hot, one value
+  EXPECT_GT(grouped, points.size() / 3);  // groups are common
+  const double per_contribution =
+      20.0 * (20.0 + num_classes) / (num_classes * num_classes) * KernelTable::kMaxError *
+      config.sigma0;
+  // The subtrees below the sensor and beside them: the ground and the objects near it.
+  size_t voxels = 0;
+  double worst = 0.0, worst_relative = 0.0;
+  const octomap::OcTreeKey sensor = tree.coordToKey(0.0, 0.0, 0.0);
+  const int size = 1 << kSubtreeLevels;
+  for (int dx = -1; dx <= 0; ++dx)
+    for (int dy = -1; dy <= 0; ++dy) {
+      const octomap::OcTreeKey base(
+          static_cast<octomap::key_type>((sensor[0] / size + dx) * size),
+          static_cast<octomap::key_type>((sensor[1] / size + dy) * size),
+          static_cast<octomap::key_type>((sensor[2] / size - 1) * size));
+      const auto fast = subtreeRows(kernel, points, semantic, base, num_classes);
+      const auto reference = subtreeRows(kernel, general, semantic, base, num_classes);
+      const std::vector<int> contributions = contributionsPerVoxel(tree, points, semantic, base);
+      ASSERT_EQ(fast.size(), reference.size());
+      for (const auto& [local, row] : reference) {
+        const auto other = fast.find(local);
+        ASSERT_NE(other, fast.end()) << "voxel " << local;
+        const double bound = 2.0 * per_contribution * contributions[local];
+        for (int c = 0; c < num_classes; ++c) {
+          const double difference = std::fabs(other->second[c] - row[c]);
+          worst = std::max(worst, difference);
+          if (row[c] > 1e-3) worst_relative = std::max(worst_relative, difference / row[c]);
+          ASSERT_LE(difference, bound + 1e-12 * row[c]) << "voxel " << local << " class " << c;
+        }
+      }
+      voxels += reference.size();
+    }
+  EXPECT_GT(voxels, 50000u);
+  std::ostringstream text;
+  text << worst << " (relative " << worst_relative << ")";
+  RecordProperty("worst_difference", text.str());
+  RecordProperty("points_grouped_with_the_previous",
+                 std::to_string(grouped) + " of " + std::to_string(points.size()));
 }
 
 }  // namespace

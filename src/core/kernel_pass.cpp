@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 #include "evidential_octomap/sparse_kernel.h"
 #include "fusion_contributions.h"
@@ -14,6 +16,19 @@ namespace evidential_octomap {
 KernelTable::KernelTable(double sigma0) : sigma0_(sigma0), values_(kSteps + 1) {
   for (int i = 0; i <= kSteps; ++i)
     values_[i] = sparseKernel(std::sqrt(double(i) / kSteps), 1.0, sigma0);
+}
+
+OneHotTable::OneHotTable(double sigma0, float evidence, int num_classes, double weight)
+    : evidence_(evidence), steps_(KernelTable::kSteps + 1, Step{0.0, 0.0}) {
+  const double strength = double(num_classes) + evidence;
+  std::vector<double> values(KernelTable::kSteps + 1);
+  for (int i = 0; i <= KernelTable::kSteps; ++i) {
+    const double r = std::sqrt(double(i) / KernelTable::kSteps);
+    const double k = std::min(weight * sparseKernel(r, 1.0, sigma0), 1.0);
+    values[i] = std::log1p(evidence * k / (strength * (1.0 - k) + k * num_classes));
+  }
+  for (int i = 0; i < KernelTable::kSteps; ++i)
+    steps_[i] = {float(values[i]), float(values[i + 1] - values[i])};
 }
 
 KernelPass::KernelPass(const SemanticConfig& config, const EvidentialOcTree& tree)
@@ -28,10 +43,15 @@ KernelPass::KernelPass(const SemanticConfig& config, const EvidentialOcTree& tre
       uncertainty_kernel_(tree.rule().usesUncertaintyKernel()),
       to_cube_(config.kernel_distance == "voxel"),
       other_class_weight_(config.other_class_weight),
-      table_(config.sigma0) {}
+      sigma0_(config.sigma0),
+      table_(config.sigma0),
+      tables_per_value_(other_class_weight_ > 0.0 && other_class_weight_ < 1.0 ? 2 : 1) {}
+
+// Marks a one-hot dempster point while preparing, before its table is known.
+constexpr int kOneHot = -2;
 
 void KernelPass::preparePoints(const SemanticPoints& points, int threads,
-                               std::vector<KernelPoint>* out) const {
+                               std::vector<KernelPoint>* out) {
   const size_t m = points.positions.size();
   const double resolution = tree_.getResolution();
   out->resize(m);
@@ -43,13 +63,16 @@ void KernelPass::preparePoints(const SemanticPoints& points, int threads,
     o.evidence = points.evidence[j];
     o.strength = num_classes_;
     float best = 0.0f;
+    int with_evidence = 0;
     for (int c = 0; c < num_classes_; ++c) {
       o.strength += o.evidence[c];
+      with_evidence += o.evidence[c] > 0.0f ? 1 : 0;
       if (o.evidence[c] > best) {
         best = o.evidence[c];
         o.argmax = c;
       }
     }
+    kp.table = with_evidence == 1 && rule_.type() == FusionRuleType::kDempster ? kOneHot : -1;
     o.uncertainty = num_classes_ / o.strength;
     // S-BKI uses the plain length l; the uncertainty kernels l beta e^{1 - gamma u}.
     const float length = static_cast<float>(
@@ -66,10 +89,51 @@ void KernelPass::preparePoints(const SemanticPoints& points, int threads,
     kp.reach[2] = static_cast<int>(std::floor(length * vertical / resolution + extra)) + 1;
     kp.key = tree_.coordToKey(points.positions[j]);
   }
+  buildOneHotTables(out);
 }
 
-void KernelPass::scatter(const KernelPoint& point, const octomap::point3d& position,
-                         const octomap::OcTreeKey& base, KernelRows* out) const {
+// Tables for the evidence values that many one-hot points share (derived evidence: one value,
+// e.g. 20); the other points keep the general loop. A table costs ~0.3 ms to build.
+void KernelPass::buildOneHotTables(std::vector<KernelPoint>* points) {
+  constexpr size_t kMaxValues = 16, kMaxTables = 8, kMinPoints = 64;
+  std::vector<std::pair<float, size_t>> values;  // (evidence, points)
+  const auto evidenceOf = [](const KernelPoint& p) { return p.opinion.evidence[p.opinion.argmax]; };
+  for (const KernelPoint& p : *points) {
+    if (p.table != kOneHot) continue;
+    const float e = evidenceOf(p);
+    auto v =
+        std::find_if(values.begin(), values.end(), [&](const auto& x) { return x.first == e; });
+    if (v != values.end()) {
+      ++v->second;
+    } else if (values.size() < kMaxValues) {
+      values.emplace_back(e, 1);
+    }
+  }
+  std::stable_sort(values.begin(), values.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  // sigma0 > 1: k is clamped at 1 inside the support, a kink the interpolation would blur.
+  if (sigma0_ > 1.0) values.clear();
+  one_hot_.clear();
+  for (size_t v = 0; v < values.size() && v < kMaxTables && values[v].second >= kMinPoints; ++v) {
+    one_hot_.emplace_back(sigma0_, values[v].first, num_classes_, 1.0);
+    if (tables_per_value_ == 2)
+      one_hot_.emplace_back(sigma0_, values[v].first, num_classes_, other_class_weight_);
+  }
+  for (KernelPoint& p : *points) {
+    if (p.table != kOneHot) continue;
+    p.table = -1;
+    const float e = evidenceOf(p);
+    for (size_t t = 0; t < one_hot_.size(); t += tables_per_value_) {
+      if (one_hot_[t].evidence() == e) p.table = int(t);
+    }
+  }
+}
+
+void KernelPass::scatter(const KernelMember* group, int n, const octomap::OcTreeKey& base,
+                         KernelRows* out) const {
+  if (group[0].point->table >= 0) return scatterOneHot(group, n, base, out);
+  const KernelPoint& point = *group[0].point;
+  const octomap::point3d& position = *group[0].position;
   switch (rule_.type()) {
     case FusionRuleType::kDempster:
       return scatterWith(DempsterContribution(point.opinion, num_classes_), point, position, base,
@@ -115,6 +179,8 @@ void KernelPass::markClasses(const KernelPoint& point, const octomap::OcTreeKey&
 // another class (a network's noise) does not keep its neighbours' evidence out, a thin object's
 // few points do. (Shell voxels see only part of their neighbours, but no point scatters there.)
 void KernelPass::holdClasses(KernelRows* rows) {
+  constexpr int kSize = 1 << kSubtreeLevels;
+  if (rows->weaker_lines.empty()) rows->weaker_lines.resize(size_t(kSize) * kSize, 0);
   const std::vector<uint64_t>& seen = rows->classes;
   for (uint32_t local : rows->classes_touched) {
     const int x = int(local % kPadded), y = int(local / kPadded % kPadded),
@@ -128,13 +194,19 @@ void KernelPass::holdClasses(KernelRows* rows) {
         }
     const bool holds = rows->classes_weaker[local] || (seen[local] & beside);
     rows->classes_weaker[local] = holds ? ~seen[local] : 0;
+    if (!holds || x == 0 || y == 0 || z == 0 || x > kSize || y > kSize || z > kSize) continue;
+    rows->weaker_lines[size_t(z - 1) * kSize + (y - 1)] |= uint64_t(1) << (x - 1);
   }
 }
 
 void KernelPass::clearClasses(KernelRows* rows) {
+  constexpr int kSize = 1 << kSubtreeLevels;
   for (uint32_t local : rows->classes_touched) {
     rows->classes[local] = 0;
     rows->classes_weaker[local] = 0;
+    const int y = int(local / kPadded % kPadded), z = int(local / (kPadded * kPadded));
+    if (y >= 1 && z >= 1 && y <= kSize && z <= kSize)
+      rows->weaker_lines[size_t(z - 1) * kSize + (y - 1)] = 0;
   }
   rows->classes_touched.clear();
 }
@@ -249,7 +321,7 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
         voxels &= voxels - 1;
         const uint32_t local = line << kSubtreeLevels | uint32_t(x0 + ox);
         double weight = 1.0;
-        if (weigh_others) {
+        if (weigh_others && (out->weaker_lines[line] >> (x0 + ox) & 1)) {
           if (out->classes_weaker[paddedIndex(x0 + ox, y0 + oy, z0 + oz)] & own_class) {
             if (other_class_weight_ <= 0.0) continue;
             weight = other_class_weight_;
@@ -265,6 +337,116 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
           out->rows.resize(out->rows.size() + width, 0.0);
         }
         contribute(k, &out->rows[size_t(row) * width]);
+      }
+    }
+  }
+}
+
+// The axis terms of one member of a group, d^2 per axis offset from the group's first point
+// (as scatterWith's, +inf beyond the member's reach).
+struct MemberTerms {
+  const double* axis[3];  // indexed by the offset from the group's first point
+  double syz;             // its y + z term on the line at hand
+};
+
+void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::OcTreeKey& base,
+                               KernelRows* out) const {
+  constexpr int kSize = 1 << kSubtreeLevels;
+  const octomap::OcTreeKey& ref = group[0].point->key;
+  // The union of the members' reaches, as offsets from ref, within the subtree.
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::numeric_limits<int>::max();
+    hi[a] = std::numeric_limits<int>::min();
+    for (int i = 0; i < n; ++i) {
+      const int at = int(group[i].point->key[a]) - int(ref[a]);
+      lo[a] = std::min(lo[a], at - group[i].point->reach[a]);
+      hi[a] = std::max(hi[a], at + group[i].point->reach[a]);
+    }
+    lo[a] = std::max(lo[a], int(base[a]) - int(ref[a]));
+    hi[a] = std::min(hi[a], int(base[a]) + kSize - 1 - int(ref[a]));
+    if (lo[a] > hi[a]) return;
+  }
+  const double half = tree_.getResolution() / 2.0;
+  const int stride = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) + 1;
+  out->axis_terms.resize(size_t(3) * stride * n);
+  MemberTerms terms[kMaxGroup];
+  for (int i = 0; i < n; ++i) {
+    const KernelPoint& point = *group[i].point;
+    MemberTerms& t = terms[i];
+    for (int a = 0; a < 3; ++a) {
+      double* axis = &out->axis_terms[(size_t(i) * 3 + a) * stride] - lo[a];
+      t.axis[a] = axis;
+      const int at = int(point.key[a]) - int(ref[a]);
+      const double inv_length2 = a == 2 ? point.inv_length2_z : point.inv_length2;
+      for (int o = lo[a]; o <= hi[a]; ++o) {
+        if (std::abs(o - at) > point.reach[a]) {
+          axis[o] = std::numeric_limits<double>::infinity();
+          continue;
+        }
+        const float centre =
+            static_cast<float>(tree_.keyToCoord(static_cast<octomap::key_type>(ref[a] + o)));
+        const float d = (*group[i].position)(a) - centre;
+        const double gap = to_cube_ ? std::max(std::fabs(double(d)) - half, 0.0) : double(d);
+        axis[o] = gap * gap * inv_length2;
+      }
+    }
+  }
+  // The members share a class and an evidence value: one table (two when class-aware).
+  const int cls = group[0].point->opinion.argmax;
+  const OneHotTable& full = one_hot_[group[0].point->table];
+  const OneHotTable& weaker_table =
+      tables_per_value_ == 2 ? one_hot_[group[0].point->table + 1] : full;
+  const uint64_t own_class =
+      other_class_weight_ < 1.0 && !out->classes_touched.empty() ? classBit(cls) : 0;
+  const size_t width = size_t(DempsterContribution::kRowWidth) * num_classes_;
+  const int x0 = int(ref[0]) - int(base[0]), y0 = int(ref[1]) - int(base[1]),
+            z0 = int(ref[2]) - int(base[2]);
+  const int reach_x = hi[0] - lo[0] + 1;
+  const uint64_t reachable = (reach_x >= 64 ? ~uint64_t(0) : (uint64_t(1) << reach_x) - 1)
+                             << (x0 + lo[0]);
+  int on_line[kMaxGroup];  // the members within the support on the line at hand
+  for (int oz = lo[2]; oz <= hi[2]; ++oz) {
+    for (int oy = lo[1]; oy <= hi[1]; ++oy) {
+      const uint32_t line = uint32_t((z0 + oz) << kSubtreeLevels | (y0 + oy));
+      const uint64_t kept = (out->masked ? out->mask[line] : ~uint64_t(0)) & reachable;
+      if (!kept) continue;
+      // The members whose support crosses this line; every kept voxel of the group's reach on
+      // it is summed over them without a branch (its table gives 0 beyond a support), which
+      // costs less than finding each member's interval on each line.
+      int members = 0;
+      for (int i = 0; i < n; ++i) {
+        MemberTerms& t = terms[i];
+        t.syz = t.axis[2][oz] + t.axis[1][oy];
+        if (t.syz < 1.0) on_line[members++] = i;
+      }
+      if (!members) continue;
+      const uint64_t weaker_line = own_class ? out->weaker_lines[line] : 0;
+      uint64_t voxels = kept;
+      while (voxels) {
+        const int ox = __builtin_ctzll(voxels) - x0;
+        voxels &= voxels - 1;
+        const OneHotTable* table = &full;
+        if ((weaker_line >> (x0 + ox) & 1) &&
+            (out->classes_weaker[paddedIndex(x0 + ox, y0 + oy, z0 + oz)] & own_class)) {
+          if (other_class_weight_ <= 0.0) continue;
+          table = &weaker_table;
+        }
+        // No branch per member: beyond its support (or reach: +inf) its table gives 0.
+        double sum = 0.0;
+        for (int m = 0; m < members; ++m) {
+          const MemberTerms& t = terms[on_line[m]];
+          sum += (*table)(t.axis[0][ox] + t.syz);
+        }
+        if (!(sum > 0.0)) continue;
+        const uint32_t local = line << kSubtreeLevels | uint32_t(x0 + ox);
+        uint32_t& row = out->index[local];
+        if (row == KernelRows::kNone) {
+          row = static_cast<uint32_t>(out->touched.size());
+          out->touched.push_back(local);
+          out->rows.resize(out->rows.size() + width, 0.0);
+        }
+        out->rows[size_t(row) * width + cls] += sum;  // the row's log-evidence part
       }
     }
   }

@@ -9,9 +9,18 @@
 // positions or supports); the table's error is at most 5e-7 sigma0 (test_sparse_kernel checks it), so
 // the map differs from direct evaluation by at most that error times each contribution's
 // derivative in k (plus dempster's fastLog1p, 3e-14 relative). Rows are computed only for voxels
-// the map keeps (KernelRows::mask). Private to the core.
+// the map keeps (KernelRows::mask).
+//
+// One-hot dempster points (one class with evidence, labels made into evidence: most points of
+// most scans) take a shorter road. Their increment log1p(e f(w k)) depends on s = r^2 alone for
+// a given evidence e and class weight w, so it is tabulated over s as k is (OneHotTable: no
+// division and no product per voxel, within the same error bound per contribution), and the
+// points of one 2 x 2 x 2 block (a down-sampling cell: up to 6 points) with the same class and
+// evidence are scattered as a group: each voxel's row is looked up and updated once for the
+// group, with the sum of its members' increments. Private to the core.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -43,6 +52,31 @@ class KernelTable {
   std::vector<double> values_;  // kSteps + 1 samples
 };
 
+// The dempster increment log1p(e f(w k'(r))) (fusion_contributions.h) of a one-hot point with
+// evidence e in its class and strength S = e + C, at class weight w, as a function of s = r^2,
+// tabulated with KernelTable's steps. Its interpolation error, at most e S / C^2 (the largest
+// slope of the increment in k) times KernelTable::kMaxError sigma0, is KernelTable's bound
+// carried through the increment; test_kernel_pass checks it. Used for sigma0 <= 1 only, where
+// w k <= 1 needs no clamp.
+class OneHotTable {
+ public:
+  OneHotTable(double sigma0, float evidence, int num_classes, double weight);
+  float evidence() const { return evidence_; }
+  // Without a branch: s >= 1 (or +inf) reads the last step, 0 with slope 0.
+  double operator()(double s) const {
+    const double x = std::min(s, 1.0) * KernelTable::kSteps;
+    const int i = static_cast<int>(x);
+    return double(steps_[i].value) + (x - i) * double(steps_[i].slope);
+  }
+
+ private:
+  struct Step {
+    float value, slope;  // at step i, and to step i + 1: 32 KB, in the L1 cache
+  };
+  float evidence_;
+  std::vector<Step> steps_;  // kSteps + 1: the last is 0, 0
+};
+
 // A semantic point ready for the kernel.
 struct KernelPoint {
   octomap::OcTreeKey key;    // its voxel
@@ -50,6 +84,13 @@ struct KernelPoint {
   double inv_length2_z = 0.0;   // and along z: 1 / (L vertical_support)^2 (ground: its own)
   std::array<int, 3> reach{};  // voxels it may reach: |offset| <= reach[a] along axis a
   PointOpinion opinion;
+  int table = -1;  // one-hot dempster: its evidence's tables (KernelPass), else -1
+};
+
+// A point of a group and its position.
+struct KernelMember {
+  const KernelPoint* point;
+  const octomap::point3d* position;
 };
 
 // Kernel rows of one subtree: a dense index over its 64^3 voxels (reset after use) and C
@@ -63,7 +104,7 @@ struct KernelRows {
   std::vector<uint32_t> index;     // local voxel -> row, kNone when untouched
   std::vector<uint32_t> touched;   // local voxels with a row, in row order
   std::vector<double> rows;        // while scattering: the contribution's row width, then C
-  std::vector<double> axis_terms;  // per-axis d^2 terms of the point at hand
+  std::vector<double> axis_terms;  // per-axis d^2 terms of the point (or group) at hand
   // SemanticConfig::other_class_weight < 1: per voxel of the subtree and of a one-voxel shell
   // around it, one bit per class (c mod 64) of this scan's points in it (0 for a voxel no point
   // hit), and the classes whose points weigh other_class_weight there: every class it has no
@@ -73,6 +114,9 @@ struct KernelRows {
   std::vector<uint64_t> classes;
   std::vector<uint64_t> classes_weaker;
   std::vector<uint32_t> classes_touched;
+  // Per line of the subtree (as `mask`), the voxels whose classes_weaker is not 0: the loop
+  // reads one word a line instead of the large padded array at every voxel.
+  std::vector<uint64_t> weaker_lines;
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
 };
 
@@ -80,14 +124,23 @@ class KernelPass {
  public:
   KernelPass(const SemanticConfig& config, const EvidentialOcTree& tree);
 
-  // Opinions, supports and voxels of the semantic points (in parallel).
-  void preparePoints(const SemanticPoints& points, int threads,
-                     std::vector<KernelPoint>* out) const;
+  // Opinions, supports and voxels of the semantic points (in parallel), and the one-hot
+  // tables of the evidence values most of them share.
+  void preparePoints(const SemanticPoints& points, int threads, std::vector<KernelPoint>* out);
 
-  // Adds the contributions of `point` to the voxels of the subtree whose first voxel is `base`
-  // (64^3 voxels, kSubtreeLevels) into `rows`.
-  void scatter(const KernelPoint& point, const octomap::point3d& position,
-               const octomap::OcTreeKey& base, KernelRows* rows) const;
+  // Points scattered together: one-hot points of one class and evidence in one 2^3 block.
+  static constexpr int kMaxGroup = 8;
+  static bool sameGroup(const KernelPoint& first, const KernelPoint& next) {
+    return first.table >= 0 && next.table == first.table &&
+           next.opinion.argmax == first.opinion.argmax &&
+           (first.key[0] >> 1) == (next.key[0] >> 1) &&
+           (first.key[1] >> 1) == (next.key[1] >> 1) && (first.key[2] >> 1) == (next.key[2] >> 1);
+  }
+  // Adds the contributions of the n (<= kMaxGroup) points of `group` (one point, or points of
+  // which each is sameGroup as the first) to the voxels of the subtree whose first voxel is
+  // `base` (64^3 voxels, kSubtreeLevels) into `rows`.
+  void scatter(const KernelMember* group, int n, const octomap::OcTreeKey& base,
+               KernelRows* rows) const;
   // After the last scatter into `rows`: C increments per row (KernelRows::rows), as the rule's
   // add() takes them.
   void finishRows(KernelRows* rows) const;
@@ -107,6 +160,10 @@ class KernelPass {
   void scatterWith(const Contribution& contribute, const KernelPoint& point,
                    const octomap::point3d& position, const octomap::OcTreeKey& base,
                    KernelRows* rows) const;
+  // The loop for a group of one-hot points: the sum of their tabulated increments per voxel.
+  void scatterOneHot(const KernelMember* group, int n, const octomap::OcTreeKey& base,
+                     KernelRows* rows) const;
+  void buildOneHotTables(std::vector<KernelPoint>* points);
 
   const EvidentialOcTree& tree_;
   const FusionRule& rule_;
@@ -117,7 +174,11 @@ class KernelPass {
   bool uncertainty_kernel_;
   bool to_cube_;
   double other_class_weight_;
+  double sigma0_;
   KernelTable table_;
+  // Per evidence value of the tables: weight 1, then (class-aware) other_class_weight.
+  std::vector<OneHotTable> one_hot_;
+  int tables_per_value_ = 1;
 };
 
 }  // namespace evidential_octomap

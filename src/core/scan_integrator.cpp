@@ -153,7 +153,7 @@ SubtreeSource* ScanIntegrator::prepare(const octomap::Pointcloud& points_W,
   stats->semantic_points = scratch.points.positions.size();
   // The subtrees run the kernel loop later, inside the tree's update pass: the kernel outlives
   // this call, in the scratch.
-  const KernelPass& kernel = scratch.kernel.emplace(config_, tree);
+  KernelPass& kernel = scratch.kernel.emplace(config_, tree);
   kernel.preparePoints(scratch.points, threads, &scratch.kernel_points);
   using Targets = ScanSubtrees::Targets;
   const Targets targets = config_.semantic_occupied_only                     ? Targets::kOccupied

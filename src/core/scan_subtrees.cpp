@@ -207,9 +207,17 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
   for (size_t p = range.first_point; class_aware && p < range.last_point; ++p)
     kernel_->markClasses((*kernel_points_)[point_subtrees_[p].second], base, &kernel);
   if (class_aware) KernelPass::holdClasses(&kernel);
-  for (size_t p = range.first_point; p < range.last_point; ++p) {
-    const uint32_t j = point_subtrees_[p].second;
-    kernel_->scatter((*kernel_points_)[j], points_->positions[j], base, &kernel);
+  // Consecutive points of one 2^3 block (a down-sampling cell) scattered as a group.
+  KernelMember group[KernelPass::kMaxGroup];
+  for (size_t p = range.first_point; p < range.last_point;) {
+    int n = 0;
+    do {
+      const uint32_t j = point_subtrees_[p++].second;
+      group[n++] = {&(*kernel_points_)[j], &points_->positions[j]};
+    } while (n < KernelPass::kMaxGroup && p < range.last_point &&
+             KernelPass::sameGroup(*group[0].point,
+                                   (*kernel_points_)[point_subtrees_[p].second]));
+    kernel_->scatter(group, n, base, &kernel);
   }
   if (class_aware) KernelPass::clearClasses(&kernel);
   t.most_row_values = std::max(t.most_row_values, kernel.rows.size());
