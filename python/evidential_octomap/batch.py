@@ -196,36 +196,51 @@ class TileSchedule:
         return ready
 
 
+def chunk_plan(job: MappingJob, then: Sequence[str], scans: Optional[int],
+               chunk_size: int) -> list:
+    """(job, start, stop) of every chunk: job.data's first `scans` scans (all when None), then
+    those of each sequence in `then`, in that order."""
+    plan = []
+    for data in [job.data, *then]:
+        part = dataclasses.replace(job, data=data)
+        available = len(Dataset.open(data, ClassTable.load(job.classes)))
+        count = available if scans is None else min(scans, available)
+        if count < 1:
+            raise ValueError(f"no scans to map in {data}")
+        plan += [(part, a, b) for a, b in chunk_ranges(count, chunk_size)]
+    return plan
+
+
 def map_sequence(client, job: MappingJob, out: str, scans: Optional[int] = None,
                  chunk_size: int = 10, tile_edge: float = 25.6, retries: int = 2,
-                 progress: bool = True, chunk_fn: Callable = None) -> TiledResult:
+                 progress: bool = True, chunk_fn: Callable = None,
+                 then: Sequence[str] = ()) -> TiledResult:
     """Maps scans 0..scans-1 (all when None) of job.data on a Dask client into the tiled map
-    `out` (a new or empty directory, on a filesystem every worker sees).
+    `out` (a new or empty directory, on a filesystem every worker sees). `then`: further
+    sequences in the same world frame (a fleet's logs of one area), mapped as if one robot had
+    driven them after job.data, one after the other.
 
     Each task is retried `retries` times when it raises; a lost worker's tasks are rescheduled by
     Dask and rewrite the same files. The result does not depend on the number of workers."""
     from distributed import as_completed
 
-    available = len(Dataset.open(job.data, ClassTable.load(job.classes)))
-    count = available if scans is None else min(scans, available)
-    if count < 1:
-        raise ValueError(f"no scans to map in {job.data}")
     if os.path.isdir(out) and os.listdir(out):
         raise ValueError(f"{out} is not empty: give a new directory for the tiled map")
     job = dataclasses.replace(job, unclamped=True)  # clamped once per tile, at the end
+    plan = chunk_plan(job, then, scans, chunk_size)
+    count = sum(b - a for _, a, b in plan)
     tile_depth = tile_depth_for_edge(job.resolution, tile_edge)
     work = os.path.join(out, ".work")
     os.makedirs(work, exist_ok=True)
-    ranges = chunk_ranges(count, chunk_size)
     reach = tiles.scan_reach(job)
-    boxes = [tiles.reach_box(tiles.scan_origins(job, a, b), reach, job.resolution, tile_depth)
-             for a, b in ranges]
+    boxes = [tiles.reach_box(tiles.scan_origins(part, a, b), reach, job.resolution, tile_depth)
+             for part, a, b in plan]
     schedule = TileSchedule(boxes)
     bar = Progress(count, progress)
     chunk_fn = chunk_fn or tiles.map_chunk_to_tiles
-    pending = as_completed([client.submit(chunk_fn, job, i, a, b, work, tile_depth,
+    pending = as_completed([client.submit(chunk_fn, part, i, a, b, work, tile_depth,
                                           retries=retries, pure=False, priority=-i)
-                            for i, (a, b) in enumerate(ranges)])
+                            for i, (part, a, b) in enumerate(plan)])
     written, log_sum, points = [], 0.0, 0
     statistics, chunk_seconds, merge_seconds = {}, [], []
     for future in pending:
@@ -253,7 +268,7 @@ def map_sequence(client, job: MappingJob, out: str, scans: Optional[int] = None,
     reference = tiles.empty_like_job(job, ClassTable.load(job.classes))
     write_tiled_map_manifest(out, job.resolution, tile_depth, reference.class_names,
                              reference.rule, log_sum, points, sorted(written))
-    return TiledResult(out, len(written), len(ranges), count, chunk_seconds, merge_seconds)
+    return TiledResult(out, len(written), len(plan), count, chunk_seconds, merge_seconds)
 
 
 def merge_tile_task(job, tile, tile_depth, chunks, work, out):
@@ -283,13 +298,17 @@ def parse_arguments(argv: Optional[Sequence[str]]) -> argparse.Namespace:
         prog="python -m evidential_octomap.batch",
         description="Map a SemanticKITTI-layout sequence in chunks on Dask workers into a tiled "
                     "map equal to the sequentially built one (and, on request, one .ot).")
-    p.add_argument("--data", required=True, help="dataset directory (velodyne/, poses.txt, ...)")
+    p.add_argument("--data", required=True, action="append",
+                   help="dataset directory (velodyne/, poses.txt, ...); repeated: sequences of "
+                        "one area in one world frame (a fleet's), mapped as if one robot had "
+                        "driven them one after the other")
     p.add_argument("--classes", required=True, help="class table YAML (config/classes_*.yaml)")
     p.add_argument("--out", required=True,
                    help="the tiled map: a new directory (shared with the workers)")
     p.add_argument("--global-map", default=None, metavar="MAP.ot",
                    help="also write the whole map as one .ot, streamed tile by tile")
-    p.add_argument("--scans", type=int, default=None, help="map only the first N scans")
+    p.add_argument("--scans", type=int, default=None,
+                   help="map only the first N scans (of each sequence)")
     p.add_argument("--chunk-size", type=int, default=10, help="scans per chunk (default 10)")
     p.add_argument("--tile-edge", type=float, default=25.6,
                    help="largest tile edge [m] (default 25.6: 128 voxels at 0.2 m)")
@@ -327,7 +346,7 @@ def config_overrides(settings: Sequence[str]) -> dict:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parse_arguments(argv)
-    job = MappingJob(data=os.path.abspath(args.data), classes=os.path.abspath(args.classes),
+    job = MappingJob(data=os.path.abspath(args.data[0]), classes=os.path.abspath(args.classes),
                      resolution=args.resolution, config=config_overrides(args.set),
                      evidence=args.evidence, magnitude=args.evidence_magnitude)
     from distributed import Client
@@ -337,10 +356,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         workers = len(client.scheduler_info()["workers"])
         derived = " (DERIVED from hard labels)" if evidence_is_derived(job.evidence) else ""
-        print(f"mapping {job.data} on {workers} workers, {args.chunk_size} scans per chunk, "
+        print(f"mapping {', '.join(args.data)} on {workers} workers, {args.chunk_size} scans per chunk, "
               f"evidence {job.evidence}{derived}", file=sys.stderr)
         result = map_sequence(client, job, os.path.abspath(args.out), args.scans,
-                              args.chunk_size, args.tile_edge, args.retries, not args.quiet)
+                              args.chunk_size, args.tile_edge, args.retries, not args.quiet,
+                              then=[os.path.abspath(d) for d in args.data[1:]])
     finally:
         cluster = getattr(client, "cluster", None)
         client.close()

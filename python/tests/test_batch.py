@@ -2,6 +2,7 @@
 (clamped once at the end), does not depend on the worker count, survives failing tasks, opens
 as a TiledMap whose queries read only their tiles; the command line writes tiles and one .ot."""
 import dataclasses
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -149,6 +150,42 @@ def test_a_directory_with_files_is_refused(client, tmp_path):
     (tmp_path / "old.ot").write_bytes(b"")
     with pytest.raises(ValueError, match="not empty"):
         batch.map_sequence(client, JOB, str(tmp_path), scans=1, progress=False)
+
+
+def robot(tmp_path, name, stems):
+    """A sequence of some of the bundled scans (all poses: one world frame)."""
+    root = tmp_path / name
+    for sub, ext in (("velodyne", "bin"), ("labels", "label"), ("predictions", "label")):
+        (root / sub).mkdir(parents=True)
+        for stem in stems:
+            shutil.copy(KITTI / sub / f"{stem:06d}.{ext}", root / sub)
+    for name in ("poses.txt", "calib.txt"):
+        shutil.copy(KITTI / name, root)
+    return root
+
+
+def one_robot_driving(sequences):
+    """The sequences' scans inserted into one map, one sequence after the other."""
+    classes = eo.ClassTable.load(CLASSES)
+    tree = eo.EvidentialOcTree(JOB.resolution, classes, JOB.semantic_config())
+    batch.set_unbounded(tree, True)
+    for data in sequences:
+        dataset = eo.Dataset.open(str(data), classes)
+        for i in range(len(dataset)):
+            scan = dataset.load(i)
+            evidence = eo.derive_evidence(scan, classes.num_classes, JOB.evidence, JOB.magnitude)
+            tree.insert_scan(scan.points_world(), evidence, origin=scan.origin)
+    batch.set_unbounded(tree, False)
+    tree.clamp_occupancy()
+    return tree
+
+
+def test_two_robots_merge_into_the_map_one_robot_driving_both_makes(client, tmp_path):
+    a, b = robot(tmp_path, "a", [0, 1, 2]), robot(tmp_path, "b", [1, 2, 3, 4])  # they overlap
+    out = tmp_path / "fleet"
+    batch.map_sequence(client, dataclasses.replace(JOB, data=str(a)), str(out), chunk_size=2,
+                       tile_edge=EDGE, progress=False, then=[str(b)])
+    assert_same_map(eo.TiledMap(str(out)).global_map(), one_robot_driving([a, b]))
 
 
 def test_command_line_writes_tiles_and_the_global_map(tmp_path):
