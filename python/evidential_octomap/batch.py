@@ -108,14 +108,21 @@ def merge_in_order(earlier: ChunkMap, later: ChunkMap, unclamped: bool = False) 
     if earlier.last_scan + 1 != later.first_scan:
         raise ValueError(f"chunks must be neighbours: scans ..{earlier.last_scan} and "
                          f"{later.first_scan}..")
-    rest = EvidentialOcTree(earlier.tree.resolution, earlier.tree.class_names, earlier.tree.config)
-    rest.ground_classes = earlier.tree.ground_classes
-    earlier.tree.add_evidence(later.unobserved, rest)  # before the later chunk's observations
-    set_unbounded(earlier.tree, unclamped)
-    earlier.tree.merge(later.tree)
-    set_unbounded(earlier.tree, False)
-    earlier.unobserved.merge(rest)
+    fuse_in_order(earlier.tree, earlier.unobserved, later.tree, later.unobserved, unclamped)
     return ChunkMap(earlier.first_scan, later.last_scan, earlier.tree, earlier.unobserved)
+
+
+def fuse_in_order(tree: EvidentialOcTree, unobserved: EvidentialOcTree,
+                  later: EvidentialOcTree, later_unobserved: EvidentialOcTree,
+                  unclamped: bool) -> None:
+    """tree and unobserved become the map and the unplaced evidence of both (in place)."""
+    rest = EvidentialOcTree(tree.resolution, tree.class_names, tree.config)
+    rest.ground_classes = tree.ground_classes
+    tree.add_evidence(later_unobserved, rest)  # before the later chunk's observations
+    set_unbounded(tree, unclamped)
+    tree.merge(later)
+    set_unbounded(tree, False)
+    unobserved.merge(rest)
 
 
 def reduce_in_pairs(items: list, combine: Callable):

@@ -6,8 +6,8 @@ tiles (LocalMap's tile files: one octree node at a fixed depth each) into its wo
 A tile task merges one tile key over every chunk that wrote it, in time order, exactly as
 batch.merge_in_order merges whole chunk maps: addEvidence and merge are voxel by voxel, and no
 pruned block spans two tiles, so the merge of a tile is the merge of the maps restricted to it.
-A task thus holds one chunk's map, or three tiles (the merged so far, the next chunk's, and the
-unplaced rest), never the whole map.
+A task thus holds one chunk's map, or a few tiles (the map and unplaced evidence merged so far,
+the next chunk's two and what it could not place), never the whole map.
 
 A scan changes only voxels within its reach of the sensor (LocalMap.reach), so a tile can get
 evidence only from chunks whose sensor passed within that reach of it: once those chunks are
@@ -97,7 +97,7 @@ def merge_tile(job, tile: Tile, tile_depth: int, chunks: Sequence[int], work: st
     """Merges tile `tile` of chunks (in time order) into out/tile_...ot; returns its leaves
     (0: the chunks only held unplaced evidence there, no file). Deletes the chunk files once the
     tile is written; a rerun after that finds the tile and does nothing."""
-    from .batch import set_unbounded
+    from .batch import fuse_in_order
 
     name = tile_file_name(tile_depth, tile)
     target = os.path.join(out, name)
@@ -112,12 +112,7 @@ def merge_tile(job, tile: Tile, tile_depth: int, chunks: Sequence[int], work: st
         if merged is None:
             merged, unplaced = tree, unobserved
             continue
-        rest = empty_like_job(job, classes)
-        merged.add_evidence(unobserved, rest)  # before the later chunk's own observations
-        set_unbounded(merged, True)
-        merged.merge(tree)
-        set_unbounded(merged, False)
-        unplaced.merge(rest)
+        fuse_in_order(merged, unplaced, tree, unobserved, unclamped=True)
     leaves = merged.num_leaves if merged is not None else 0
     if leaves:
         merged.clamp_occupancy()  # once, at the end: occupancy does not depend on the chunks
