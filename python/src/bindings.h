@@ -17,9 +17,6 @@
 
 #include "evidential_octomap/evidential_octree.h"
 
-namespace evidential_octomap {
-}
-
 namespace evidential_octomap::python {
 
 namespace nb = nanobind;
