@@ -32,6 +32,7 @@ class SubtreeSource;
 struct SubtreeSeed;
 struct DroppedRows;
 class LogOddsTable;
+class TiledMap;
 struct NodeCoding;
 struct VoxelUpdate;
 namespace detail {
@@ -248,6 +249,7 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   struct UpdateTask;
   struct TopPass;
   friend class detail::TreeEditing;  // the editing calls below, for readers, tests and fuzzing
+  friend class TiledMap;  // splits maps into tiles and streams tiles into one .ot (tiled_map.h)
 
   void setNumClasses(int num_classes);
   // The support answer of a voxel without evidence (query_support.cpp): the support length of a

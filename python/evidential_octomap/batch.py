@@ -1,29 +1,41 @@
-"""Batch mapping of a long sequence on Dask: chunks of scans are mapped on workers and the chunk
-maps are merged in time order into one .ot that equals the sequentially built map.
+"""Batch mapping of a long sequence on Dask, by time and by space: chunks of scans are mapped on
+workers and written as tiles, each tile is merged over the chunks that wrote it, and the result
+is a tiled map (a directory: tiled_map.yaml and one .ot per tile; TiledMap opens it) equal to
+the sequentially built map, plus on request one global .ot streamed tile by tile.
 
     python -m evidential_octomap.batch --data data/semantickitti_08_first10 \\
-        --classes config/classes_semantickitti.yaml --out out/batch/map.ot --chunk-size 2
+        --classes config/classes_semantickitti.yaml --out out/batch/tiles --chunk-size 2 \\
+        --global-map out/batch/map.ot --set max_range=50
 
-Local by default (a LocalCluster with one single-threaded worker per core); ``--scheduler
-tcp://host:8786`` runs the same job on a Dask cluster. Why the merge is exact: each chunk map keeps
-the evidence it could not place (its voxels were not observed yet inside the chunk); merging an
-earlier and a later chunk first hands the later chunk's unplaced evidence to the voxels the earlier
-chunk observed (EvidentialOcTree.add_evidence), then fuses the maps (Dempster's rule in evidence
-space is commutative and associative). The merge tree pairs neighbouring chunks, so its shape
-depends on the number of chunks only, never on the number of workers.
+Local by default (a LocalCluster); ``--scheduler tcp://host:8786`` runs the same job on a Dask
+cluster whose workers see --data and --out at the same paths (a shared directory).
+
+Why the merge is exact: each chunk map keeps the evidence it could not place (its voxels were not
+observed yet inside the chunk); merging an earlier and a later chunk first hands the later
+chunk's unplaced evidence to the voxels the earlier chunk observed (EvidentialOcTree.add_evidence),
+then fuses the maps (Dempster's rule in evidence space is commutative and associative). Both
+steps work voxel by voxel, so they split into tiles (tiles.py): no task ever holds more than one
+chunk's map or three tiles. Occupancy log-odds are summed unclamped and clamped once per tile at
+the end, so the result does not depend on the chunking or the number of workers; it equals the
+sequential map clamped once at the end (OctoMap clamps after every scan, which no merge can
+reproduce).
 """
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import logging
 import os
 import sys
 import time
+from statistics import fmean as mean
 from dataclasses import dataclass, field
 from typing import Callable, Optional, Sequence
 
 from ._core import ClassTable, Dataset, EvidentialOcTree, SemanticConfig, derive_evidence
-from ._core import EVIDENCE_MAGNITUDE, evidence_is_derived
+from ._core import EVIDENCE_MAGNITUDE, TiledMap, evidence_is_derived, tile_depth_for_edge
+from ._core import write_tiled_map_manifest
+from . import tiles
 
 FLT_MAX = 3.4028234663852886e38  # largest float: "unbounded" log-odds that still save as .ot
 
@@ -96,14 +108,21 @@ def merge_in_order(earlier: ChunkMap, later: ChunkMap, unclamped: bool = False) 
     if earlier.last_scan + 1 != later.first_scan:
         raise ValueError(f"chunks must be neighbours: scans ..{earlier.last_scan} and "
                          f"{later.first_scan}..")
-    rest = EvidentialOcTree(earlier.tree.resolution, earlier.tree.class_names, earlier.tree.config)
-    rest.ground_classes = earlier.tree.ground_classes
-    earlier.tree.add_evidence(later.unobserved, rest)  # before the later chunk's observations
-    set_unbounded(earlier.tree, unclamped)
-    earlier.tree.merge(later.tree)
-    set_unbounded(earlier.tree, False)
-    earlier.unobserved.merge(rest)
+    fuse_in_order(earlier.tree, earlier.unobserved, later.tree, later.unobserved, unclamped)
     return ChunkMap(earlier.first_scan, later.last_scan, earlier.tree, earlier.unobserved)
+
+
+def fuse_in_order(tree: EvidentialOcTree, unobserved: EvidentialOcTree,
+                  later: EvidentialOcTree, later_unobserved: EvidentialOcTree,
+                  unclamped: bool) -> None:
+    """tree and unobserved become the map and the unplaced evidence of both (in place)."""
+    rest = EvidentialOcTree(tree.resolution, tree.class_names, tree.config)
+    rest.ground_classes = tree.ground_classes
+    tree.add_evidence(later_unobserved, rest)  # before the later chunk's observations
+    set_unbounded(tree, unclamped)
+    tree.merge(later)
+    set_unbounded(tree, False)
+    unobserved.merge(rest)
 
 
 def reduce_in_pairs(items: list, combine: Callable):
@@ -116,104 +135,196 @@ def reduce_in_pairs(items: list, combine: Callable):
 
 
 class Progress:
-    """One status line on stderr: chunks mapped and merges done, with elapsed time."""
+    """One status line on stderr: scans mapped and tiles merged, with elapsed time."""
 
-    def __init__(self, chunks: int, enabled: bool):
-        self.chunks, self.merges = chunks, max(chunks - 1, 0)
-        self.mapped = self.merged = 0
+    def __init__(self, scans: int, enabled: bool):
+        self.scans, self.mapped, self.tiles, self.merged = scans, 0, 0, 0
         self.enabled = enabled
         self.start = time.monotonic()
 
-    def update(self, mapped: int = 0, merged: int = 0) -> None:
+    def update(self, mapped: int = 0, tiles: int = 0, merged: int = 0) -> None:
         self.mapped += mapped
+        self.tiles += tiles
         self.merged += merged
         if not self.enabled:
             return
-        total = self.chunks + self.merges
-        done = self.mapped + self.merged
-        bar = "#" * (30 * done // total) if total else ""
-        sys.stderr.write(f"\r[{bar:<30}] {self.mapped}/{self.chunks} chunks mapped, "
-                         f"{self.merged}/{self.merges} merged, {time.monotonic() - self.start:.1f} s")
-        if done == total:
-            sys.stderr.write("\n")
+        bar = "#" * (30 * self.mapped // self.scans)
+        sys.stderr.write(f"\r[{bar:<30}] {self.mapped}/{self.scans} scans mapped, "
+                         f"{self.merged}/{self.tiles} tiles merged, "
+                         f"{time.monotonic() - self.start:.1f} s")
         sys.stderr.flush()
 
+    def close(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\n")
 
-def map_sequence(client, job: MappingJob, scans: Optional[int] = None, chunk_size: int = 10,
-                 retries: int = 2, progress: bool = True,
-                 chunk_fn: Callable[[MappingJob, int, int], ChunkMap] = map_chunk) -> EvidentialOcTree:
-    """Maps scans 0..scans-1 (all when None) of job.data on a Dask client; returns the merged map.
+
+@dataclass
+class TiledResult:
+    """A finished batch: the tiled map's directory and what it took."""
+
+    directory: str
+    tiles: int
+    chunks: int
+    scans: int
+    chunk_seconds: list  # each chunk task's wall time
+    merge_seconds: list  # each tile task's wall time
+
+
+class TileSchedule:
+    """Which tiles may be merged: a tile is ready once every chunk whose sensor came within a
+    scan's reach of it is mapped (tiles.reach_box); the chunks that wrote it, in time order,
+    are its inputs."""
+
+    def __init__(self, boxes: list):
+        self.boxes = boxes
+        self.waiting: dict = {}  # tile -> chunks not mapped yet that may write it
+        self.inputs: dict = {}  # tile -> chunks that wrote it
+        self.done: set = set()
+
+    def mapped(self, result: tiles.ChunkTiles) -> list:
+        """Records a mapped chunk; returns the tiles now ready, each with its input chunks."""
+        self.done.add(result.index)
+        for tile in result.tiles | result.unobserved:
+            if not tiles.in_box(tile, self.boxes[result.index]):
+                raise RuntimeError(f"chunk {result.index} wrote tile {tile} beyond the reach of "
+                                   "its scans (a pose that is not the scan's origin?)")
+            if tile not in self.inputs:
+                self.inputs[tile] = []
+                self.waiting[tile] = {c for c, box in enumerate(self.boxes)
+                                      if c not in self.done and tiles.in_box(tile, box)}
+            self.inputs[tile].append(result.index)
+        ready = []
+        for tile, chunks in list(self.waiting.items()):
+            chunks.discard(result.index)
+            if not chunks:
+                del self.waiting[tile]
+                ready.append((tile, sorted(self.inputs.pop(tile))))
+        return ready
+
+
+def chunk_plan(job: MappingJob, then: Sequence[str], scans: Optional[int],
+               chunk_size: int) -> list:
+    """(job, start, stop) of every chunk: job.data's first `scans` scans (all when None), then
+    those of each sequence in `then`, in that order."""
+    plan = []
+    for data in [job.data, *then]:
+        part = dataclasses.replace(job, data=data)
+        available = len(Dataset.open(data, ClassTable.load(job.classes)))
+        count = available if scans is None else min(scans, available)
+        if count < 1:
+            raise ValueError(f"no scans to map in {data}")
+        plan += [(part, a, b) for a, b in chunk_ranges(count, chunk_size)]
+    return plan
+
+
+def map_sequence(client, job: MappingJob, out: str, scans: Optional[int] = None,
+                 chunk_size: int = 10, tile_edge: float = 25.6, retries: int = 2,
+                 progress: bool = True, chunk_fn: Callable = None,
+                 then: Sequence[str] = ()) -> TiledResult:
+    """Maps scans 0..scans-1 (all when None) of job.data on a Dask client into the tiled map
+    `out` (a new or empty directory, on a filesystem every worker sees). `then`: further
+    sequences in the same world frame (a fleet's logs of one area), mapped as if one robot had
+    driven them after job.data, one after the other.
 
     Each task is retried `retries` times when it raises; a lost worker's tasks are rescheduled by
-    Dask. The result does not depend on the number of workers."""
+    Dask and rewrite the same files. The result does not depend on the number of workers."""
     from distributed import as_completed
 
-    available = len(Dataset.open(job.data, ClassTable.load(job.classes)))
-    count = available if scans is None else min(scans, available)
-    if count < 1:
-        raise ValueError(f"no scans to map in {job.data}")
-    ranges = chunk_ranges(count, chunk_size)
-    bar = Progress(len(ranges), progress)
-    # Memory: a merge runs as soon as its two inputs exist (merges outrank chunks, deeper merges
-    # first), and a map is released once the merge that consumed it is done (no future refers
-    # to it any more), so a worker holds about one map per level of the merge tree instead of
-    # every chunk map of the sequence.
-    chunks = [client.submit(chunk_fn, job, start, stop, retries=retries, pure=False)
-              for start, stop in ranges]
-    depth = {f.key: 0 for f in chunks}
-    merges, inputs = [], {}  # inputs: merge key -> the two futures it consumes
-
-    def submit_merge(earlier, later):
-        level = 1 + max(depth[earlier.key], depth[later.key])
-        merges.append(client.submit(merge_in_order, earlier, later, job.unclamped,
-                                    retries=retries, pure=False, priority=level))
-        depth[merges[-1].key] = level
-        inputs[merges[-1].key] = (earlier, later)
-        return merges[-1]
-
-    result = reduce_in_pairs(chunks, submit_merge)
-    pending = as_completed(chunks + merges)
-    chunks.clear()
-    merges.clear()
+    if os.path.isdir(out) and os.listdir(out):
+        raise ValueError(f"{out} is not empty: give a new directory for the tiled map")
+    job = dataclasses.replace(job, unclamped=True)  # clamped once per tile, at the end
+    plan = chunk_plan(job, then, scans, chunk_size)
+    count = sum(b - a for _, a, b in plan)
+    tile_depth = tile_depth_for_edge(job.resolution, tile_edge)
+    work = os.path.join(out, ".work")
+    os.makedirs(work, exist_ok=True)
+    reach = tiles.scan_reach(job)
+    boxes = [tiles.reach_box(tiles.scan_origins(part, a, b), reach, job.resolution, tile_depth)
+             for part, a, b in plan]
+    schedule = TileSchedule(boxes)
+    bar = Progress(count, progress)
+    chunk_fn = chunk_fn or tiles.map_chunk_to_tiles
+    pending = as_completed([client.submit(chunk_fn, part, i, a, b, work, tile_depth,
+                                          retries=retries, pure=False, priority=-i)
+                            for i, (part, a, b) in enumerate(plan)])
+    written, log_sum, points = [], 0.0, 0
+    statistics, chunk_seconds, merge_seconds = {}, [], []
     for future in pending:
-        consumed = inputs.pop(future.key, None)  # dropped at the next step: its maps go
-        bar.update(merged=int(consumed is not None), mapped=int(consumed is None))
-    tree = result.result().tree
-    if job.unclamped:
-        tree.clamp_occupancy()  # once, at the end
-    return tree
+        result = future.result()
+        future.release()  # a finished task is never rerun for a lost worker
+        if isinstance(result, tiles.ChunkTiles):
+            statistics[result.index] = (result.evidence_log_sum, result.evidence_points)
+            chunk_seconds.append(result.seconds)
+            ready = schedule.mapped(result)
+            bar.update(mapped=result.scans, tiles=len(ready))
+            for tile, chunks in ready:
+                pending.add(client.submit(merge_tile_task, job, tile, tile_depth, chunks, work,
+                                          out, retries=retries, pure=False, priority=1))
+        else:
+            tile, leaves, seconds = result
+            merge_seconds.append(seconds)
+            if leaves:
+                written.append(tile)
+            bar.update(merged=1)
+    bar.close()
+    for index in sorted(statistics):  # summed in time order: the same for any worker count
+        log_sum += statistics[index][0]
+        points += statistics[index][1]
+    tiles.remove_work(work)
+    reference = tiles.empty_like_job(job, ClassTable.load(job.classes))
+    write_tiled_map_manifest(out, job.resolution, tile_depth, reference.class_names,
+                             reference.rule, log_sum, points, sorted(written))
+    return TiledResult(out, len(written), len(plan), count, chunk_seconds, merge_seconds)
 
 
-def local_client(workers: Optional[int]):
+def merge_tile_task(job, tile, tile_depth, chunks, work, out):
+    began = time.perf_counter()
+    leaves = tiles.merge_tile(job, tile, tile_depth, chunks, work, out)
+    return tile, leaves, time.perf_counter() - began
+
+
+def local_client(workers: Optional[int], threads: Optional[int] = None):
     """A LocalCluster of single-threaded worker processes (one per core by default); each
-    worker's OpenMP threads get an equal share of the cores."""
+    worker's OpenMP threads get `threads` cores (default: an equal share)."""
     from distributed import Client, LocalCluster
 
     cores = os.cpu_count() or 1
     workers = workers or cores
-    threads = str(max(1, cores // workers))
+    threads = threads or max(1, cores // workers)
     # Task errors reach the caller as exceptions; the workers' own logs would only add shutdown
     # noise (heartbeats racing the scheduler's close).
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                            dashboard_address=":0", silence_logs=logging.CRITICAL,
-                           env={"OMP_NUM_THREADS": threads})
+                           env={"OMP_NUM_THREADS": str(threads)})
     return Client(cluster)
 
 
 def parse_arguments(argv: Optional[Sequence[str]]) -> argparse.Namespace:
     p = argparse.ArgumentParser(
         prog="python -m evidential_octomap.batch",
-        description="Map a SemanticKITTI-layout sequence in chunks on Dask workers and merge the "
-                    "chunk maps exactly into one .ot.")
-    p.add_argument("--data", required=True, help="dataset directory (velodyne/, poses.txt, ...)")
+        description="Map a SemanticKITTI-layout sequence in chunks on Dask workers into a tiled "
+                    "map equal to the sequentially built one (and, on request, one .ot).")
+    p.add_argument("--data", required=True, action="append",
+                   help="dataset directory (velodyne/, poses.txt, ...); repeated: sequences of "
+                        "one area in one world frame (a fleet's), mapped as if one robot had "
+                        "driven them one after the other")
     p.add_argument("--classes", required=True, help="class table YAML (config/classes_*.yaml)")
-    p.add_argument("--out", required=True, help="merged map (.ot)")
-    p.add_argument("--scans", type=int, default=None, help="map only the first N scans")
+    p.add_argument("--out", required=True,
+                   help="the tiled map: a new directory (shared with the workers)")
+    p.add_argument("--global-map", default=None, metavar="MAP.ot",
+                   help="also write the whole map as one .ot, streamed tile by tile")
+    p.add_argument("--scans", type=int, default=None,
+                   help="map only the first N scans (of each sequence)")
     p.add_argument("--chunk-size", type=int, default=10, help="scans per chunk (default 10)")
+    p.add_argument("--tile-edge", type=float, default=25.6,
+                   help="largest tile edge [m] (default 25.6: 128 voxels at 0.2 m)")
     p.add_argument("--scheduler", default=None,
                    help="address of a Dask scheduler (tcp://host:8786); default: a local cluster")
     p.add_argument("--workers", type=int, default=None,
                    help="local worker processes (default: one per core)")
+    p.add_argument("--threads", type=int, default=None,
+                   help="OpenMP threads of each local worker (default: cores / workers)")
     p.add_argument("--retries", type=int, default=2, help="retries of a failing task (default 2)")
     p.add_argument("--resolution", type=float, default=0.2, help="voxel size [m] (default 0.2)")
     p.add_argument("--evidence", default="onehot",
@@ -221,9 +332,6 @@ def parse_arguments(argv: Optional[Sequence[str]]) -> argparse.Namespace:
                         "'onehot' (default) or 'knn-vote'")
     p.add_argument("-E", "--evidence-magnitude", type=float, default=EVIDENCE_MAGNITUDE,
                    help="E of derived evidence (default 20)")
-    p.add_argument("--unclamped-merge", action="store_true",
-                   help="keep chunk maps' occupancy unclamped and clamp once after the merge: "
-                        "occupancy then does not depend on the chunking")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="a SemanticConfig parameter, e.g. --set rule=sbki --set max_range=50")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -245,30 +353,34 @@ def config_overrides(settings: Sequence[str]) -> dict:
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parse_arguments(argv)
-    job = MappingJob(data=os.path.abspath(args.data), classes=os.path.abspath(args.classes),
+    job = MappingJob(data=os.path.abspath(args.data[0]), classes=os.path.abspath(args.classes),
                      resolution=args.resolution, config=config_overrides(args.set),
-                     evidence=args.evidence, magnitude=args.evidence_magnitude,
-                     unclamped=args.unclamped_merge)
+                     evidence=args.evidence, magnitude=args.evidence_magnitude)
     from distributed import Client
 
     start = time.monotonic()
-    client = Client(args.scheduler) if args.scheduler else local_client(args.workers)
+    client = Client(args.scheduler) if args.scheduler else local_client(args.workers, args.threads)
     try:
         workers = len(client.scheduler_info()["workers"])
         derived = " (DERIVED from hard labels)" if evidence_is_derived(job.evidence) else ""
-        print(f"mapping {job.data} on {workers} workers, {args.chunk_size} scans per chunk, "
+        print(f"mapping {', '.join(args.data)} on {workers} workers, {args.chunk_size} scans per chunk, "
               f"evidence {job.evidence}{derived}", file=sys.stderr)
-        tree = map_sequence(client, job, args.scans, args.chunk_size, args.retries,
-                            not args.quiet)
+        result = map_sequence(client, job, os.path.abspath(args.out), args.scans,
+                              args.chunk_size, args.tile_edge, args.retries, not args.quiet,
+                              then=[os.path.abspath(d) for d in args.data[1:]])
     finally:
         cluster = getattr(client, "cluster", None)
         client.close()
         if cluster is not None and not args.scheduler:
             cluster.close()
-    os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    tree.save(args.out)
-    print(f"wrote {args.out}: {tree.num_leaves} leaves, {tree.num_semantic_nodes} semantic nodes "
-          f"({time.monotonic() - start:.1f} s)")
+    print(f"wrote {args.out}: {result.tiles} tiles from {result.chunks} chunks of "
+          f"{result.scans} scans ({time.monotonic() - start:.1f} s)")
+    print(f"task wall times: chunk {mean(result.chunk_seconds or [0]):.2f} s x {result.chunks}, tile "
+          f"merge {mean(result.merge_seconds or [0]):.3f} s x {len(result.merge_seconds)}")
+    if args.global_map:
+        os.makedirs(os.path.dirname(os.path.abspath(args.global_map)), exist_ok=True)
+        TiledMap(result.directory).write_global_map(args.global_map)
+        print(f"wrote {args.global_map} ({time.monotonic() - start:.1f} s)")
     return 0
 
 

@@ -14,7 +14,6 @@
 #include "evidential_octomap/calibration_file.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
-#include "evidential_octomap/local_map.h"
 #include "evidential_octomap/safe_key.h"
 
 namespace evidential_octomap::python {
@@ -201,7 +200,7 @@ InsertStats insertScan(EvidentialOcTree& tree, const PointsIn& points, const Mat
                                  unobserved);
 }
 
-QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const LocalMap* local) {
+QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const MapAt& map_at) {
   const size_t n = points.shape(0);
   const int num_classes = tree.numClasses();
   std::vector<int32_t> labels(n);
@@ -222,9 +221,8 @@ QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const Lo
   };
   {
     nb::gil_scoped_release release;
-    if (local) {  // one tile read at a time: mapAt is not thread-safe
-      for (size_t i = 0; i < n; ++i)
-        answer(i, local->mapAt(octomap::point3d(p(i, 0), p(i, 1), p(i, 2))));
+    if (map_at) {  // one tile read at a time: mapAt is not thread-safe
+      for (size_t i = 0; i < n; ++i) answer(i, map_at(octomap::point3d(p(i, 0), p(i, 1), p(i, 2))));
     } else {
 #pragma omp parallel for schedule(static)
       for (size_t i = 0; i < n; ++i) answer(i, tree);

@@ -9,16 +9,13 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <initializer_list>
 #include <memory>
 #include <optional>
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
-
-namespace evidential_octomap {
-class LocalMap;
-}
 
 namespace evidential_octomap::python {
 
@@ -67,10 +64,11 @@ struct QueryResult {
   Array<bool> known;         // (N,) the voxel exists in the map (observed)
 };
 
-// EvidentialOcTree.query; with `local` (whose resident map is `tree`), points on tiles on disk
-// are answered from their tile (LocalMap::mapAt, one point after another).
-QueryResult query(const EvidentialOcTree& tree, const PointsIn& points,
-                  const LocalMap* local = nullptr);
+// The map that answers a point (LocalMap::mapAt, TiledMap::mapAt).
+using MapAt = std::function<const EvidentialOcTree&(const octomap::point3d&)>;
+// EvidentialOcTree.query; with `map_at` (maps of `tree`'s class count), each point is answered
+// from the map it gives, one point after another (tiles read from disk are not thread-safe).
+QueryResult query(const EvidentialOcTree& tree, const PointsIn& points, const MapAt& map_at = {});
 
 void bindClassTable(nb::module_& m);
 void bindLocalMap(nb::module_& m);

@@ -29,7 +29,7 @@ def merged(job, chunk, in_order):
     def in_order_merge(earlier, later):
         return batch.merge_in_order(earlier, later, job.unclamped)
 
-    # The merge tree of map_sequence.
+    # A merge tree over neighbouring chunks (any such tree gives the same map).
     result = batch.reduce_in_pairs(chunks, in_order_merge if in_order else plain)
     if job.unclamped:
         result.tree.clamp_occupancy()

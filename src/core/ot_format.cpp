@@ -38,6 +38,7 @@
 #include <octomap/octomap_utils.h>
 
 #include "crc32.h"
+#include "section_writer.h"
 #include "log_odds_table.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "payload_store.h"
@@ -47,7 +48,7 @@ namespace evidential_octomap {
 namespace {
 
 constexpr uint32_t kFileMagic = 0x4D455645u;  // "EVEM"
-constexpr uint32_t kFileEndMagic = 0x444E4545u;
+constexpr uint32_t kFileEndMagic = kSectionEndMagic;
 constexpr uint32_t kFormatWithoutCrc = 1;
 constexpr uint32_t kFormatWithInnerPayloads = 2;
 constexpr uint32_t kFormatSparseNodes = 3;  // no inner payloads, sparse leaf payloads
@@ -102,42 +103,6 @@ std::string storedParameterProblem(double resolution, const float (&occupancy)[5
 }
 
 }  // namespace
-
-// Collects the section in memory and hands it to the stream in large writes, with its running
-// CRC: millions of small ostream::write calls cost more than the encoding.
-class EvidentialOcTree::SectionWriter {
- public:
-  explicit SectionWriter(std::ostream& s) : s_(s) { buffer_.reserve(kFlushBytes + 4096); }
-  ~SectionWriter() { flush(); }
-  void bytes(const void* data, size_t size) {
-    const char* from = static_cast<const char*>(data);
-    buffer_.insert(buffer_.end(), from, from + size);
-    if (buffer_.size() >= kFlushBytes) flush();
-  }
-  template <typename T>
-  void pod(const T& value) {
-    bytes(&value, sizeof(T));
-  }
-  void string(const std::string& text) {
-    pod(static_cast<uint32_t>(text.size()));
-    bytes(text.data(), text.size());
-  }
-  uint32_t crc() {
-    flush();
-    return crc_;
-  }
-  void flush() {
-    crc_ = crc32Update(crc_, buffer_.data(), buffer_.size());
-    s_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
-    buffer_.clear();
-  }
-
- private:
-  static constexpr size_t kFlushBytes = 1 << 16;
-  std::ostream& s_;
-  std::vector<char> buffer_;
-  uint32_t crc_ = 0;
-};
 
 class EvidentialOcTree::SectionReader {
  public:

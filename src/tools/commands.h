@@ -19,6 +19,7 @@ void addCompareCommand(CLI::App& app);   // compare.cpp
 void addExportCommand(CLI::App& app);    // export_color.cpp
 void addMergeCommand(CLI::App& app);     // merge.cpp
 void addInfoCommand(CLI::App& app);      // info.cpp
+void addTilesCommand(CLI::App& app);     // tiles.cpp
 void addFeaturesCommand(CLI::App& app);  // features.cpp
 void addCalibrateCommand(CLI::App& app); // calibrate.cpp
 void addGenerateCommand(CLI::App& app);  // generate.cpp

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   t::addExportCommand(app);
   t::addMergeCommand(app);
   t::addInfoCommand(app);
+  t::addTilesCommand(app);
   t::addFeaturesCommand(app);
   t::addParametersCommand(app);
   t::addCalibrateCommand(app);
