@@ -1,16 +1,16 @@
-// Moving objects leave no ghosts (SemanticConfig::clearing_observations), by the library defaults
-// and in the live profile (config/mapping_live.yaml): a SYNTHETIC street scene, a 0.6 x 0.6 x
-// 1.8 m person walking 7.5 m across the view of a 32-beam LiDAR 8 m away (50 scans), then the
-// empty street; fast free space still clearing what a mover left; the discount's rules on single
-// voxels.
+// Moving objects leave no ghosts (SemanticConfig::clearing_observations, off by default), with
+// the library defaults and the live profile (config/mapping_live.yaml) otherwise: a SYNTHETIC
+// street, a 0.6 x 0.6 x 1.8 m person walking 7.5 m across the view of a 32-beam LiDAR 8 m away
+// (50 scans), then the empty street; fast free space still clearing what a mover left; the
+// discount's rules on single voxels.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <set>
 #include <string>
-#include <map>
 #include <tuple>
 #include <vector>
 
