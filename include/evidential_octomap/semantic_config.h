@@ -116,12 +116,14 @@ struct MapSettings {
 };
 
 struct InsertSettings {
-  // Fast free space for live mapping (not exact): each ray is cast back from its end and stops
-  // after two cells already cleared by this scan's other rays, so the many rays that overlap
-  // near the sensor are cast once (voxblox's "fast" integrator rule). Hits, semantics and the
-  // free space near the hits are as in the exact mode; a few cells that only a stopped ray
-  // would have crossed stay unobserved that scan (docs/experiments/benchmarks.md measures the
-  // difference). An insertion setting like threads: not stored in the map.
+  // Fast free space for live mapping (not exact): each ray's cells are walked back from its end
+  // and take a shortcut after two cells already cleared by this scan's other rays, so the many
+  // rays that overlap near the sensor are cast once (voxblox's "fast" integrator rule). Past the
+  // shortcut a ray still clears every cell of an 8x8x8 block that holds an occupied voxel or
+  // semantics, so what a mover left is cleared as in the exact mode; only free space without
+  // semantics that only a shortcut ray crosses stays unobserved that scan
+  // (docs/experiments/benchmarks.md and docs/experiments/moving_objects.md measure it). An
+  // insertion setting like threads: not stored in the map.
   bool fast_free_space = false;
   // Point evidence below this value counts as 0 (0: off). An evidential network's softplus or
   // exp head gives every class some evidence, nearly all of it tiny. A contribution's log-evidence
@@ -132,13 +134,18 @@ struct InsertSettings {
   // stored.
   double evidence_floor = 0.0;
   // Moving objects leave no ghosts: each clearing observation of a voxel (a ray of a scan passes
-  // through it and no ray ends in it) discounts the semantic evidence it holds after the scan,
-  // the kernel evidence this scan spread into it included (the scan itself saw it empty), so
-  // that after `clearing_observations` clearings without new evidence the voxel answers no class (its payload is released). Discounting keeps every class's share
-  // (dempster: L^c scaled; sbki/ebs: alpha^c - prior scaled), so a voxel that is hit and only
-  // sometimes passed through keeps its class. 0: off. An insertion setting: not stored in the map.
-  // Sequential mapping only: a merge of chunk maps cannot apply one chunk's clearings to another
-  // chunk's evidence, so batch mapping equals sequential mapping with this setting at 0.
+  // through it, no ray ends in it, and it is free after the scan's misses) discounts the semantic
+  // evidence it held before the scan, so that after `clearing_observations` clearings without
+  // new evidence the voxel answers no class (its payload is released; a surface map,
+  // semantic_occupied_only, keeps a vacuous one so that the voxel, seen empty, is not answered
+  // from the surface around it). A surface that rays graze stays occupied and keeps its class;
+  // the kernel evidence a scan spreads into a free voxel is kept for that scan. Discounting keeps
+  // every class's share (dempster: L^c scaled; sbki/ebs: alpha^c - prior scaled). 0: off, the
+  // default: on the bundled static street K = 3 costs 0.8 (one-hot) to 2.0 (learned) points of
+  // mIoU and 0.02 of Brier score, outside the bootstrap intervals (docs/long_missions.md). An
+  // insertion setting: not stored in the map. Sequential mapping only: a merge of chunk maps
+  // cannot apply one chunk's clearings to another chunk's evidence, so batch mapping equals
+  // sequential mapping with this setting at 0.
   int clearing_observations = 0;
   // Thin objects keep their class: in a voxel that this scan's points show to hold other
   // classes but not the point's own, a point's kernel weight is scaled by this (1: classes

@@ -329,16 +329,20 @@ size_t EvidentialOcTree::updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdat
   if (update.occupancy != 0) {
     updateNodeLogOdds(leaf, update.occupancy > 0 ? prob_hit_log : prob_miss_log);
   }
-  const bool cleared = update.occupancy < 0 && discountsClearings();
+  // A surface that a ray grazes stays occupied and keeps its class; a voxel the clearings freed
+  // (a mover has gone) forgets it.
+  const bool cleared = update.occupancy < 0 && discountsClearings() && !isNodeOccupied(leaf);
   if (update.increments == VoxelUpdate::kNoIncrements) {
     if (cleared) discountClearedLeaf(leaf, edit);
     return 0;
   }
+  // What the voxel held before this scan is discounted; the kernel evidence this scan's points
+  // spread into it is what a surface next to it gives its free space now.
+  if (cleared) discountClearedLeaf(leaf, edit);
   float values[kMaxClasses];
   leafValues(leaf, values);
   rule_->add(values, batch.rows + size_t(update.increments) * num_classes_, num_classes_);
   storeLeafValues(leaf, values, edit);
-  if (cleared) discountClearedLeaf(leaf, edit);  // this scan's kernel evidence too
   return 1;
 }
 

@@ -3,29 +3,17 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <bitset>
 #include <cmath>
 #include <limits>
-#include <type_traits>
 
 namespace evidential_octomap {
 namespace {
-
-// Calls visit(key); its bool result when it returns one, else true (go on).
-template <typename Visit>
-bool visitKey(Visit& visit, const octomap::OcTreeKey& key) {
-  if constexpr (std::is_same_v<decltype(visit(key)), bool>) {
-    return visit(key);
-  } else {
-    visit(key);
-    return true;
-  }
-}
 
 // Calls visit(key) for every key OctoMap's computeRayKeys(origin, end) returns, in the same
 // order: the same 3-D DDA (Amanatides & Woo) with the same float and double arithmetic, step
 // for step, so the voxels are bit-for-bit OctoMap's (test_ray_casting checks it ray by ray).
 // Written out here so that each cell goes straight into the brick set instead of a KeyRay.
-// visit may return bool: false stops the ray there (the fast free-space mode).
 template <typename Visit>
 bool traceRay(const EvidentialOcTree& tree, const octomap::point3d& origin,
               const octomap::point3d& end, Visit&& visit) {
@@ -34,7 +22,7 @@ bool traceRay(const EvidentialOcTree& tree, const octomap::point3d& origin,
     return false;
   }
   if (key_origin == key_end) return true;
-  if (!visitKey(visit, key_origin)) return true;
+  visit(key_origin);
   octomap::point3d direction = (end - origin);
   const float length = (float)direction.norm();
   direction /= length;
@@ -73,7 +61,7 @@ bool traceRay(const EvidentialOcTree& tree, const octomap::point3d& origin,
     if (current == key_end) return true;
     // Past the end point without reaching its voxel (rounding): OctoMap stops here too.
     if (std::min(std::min(t_max[0], t_max[1]), t_max[2]) > length) return true;
-    if (!visitKey(visit, current)) return true;
+    visit(current);
   }
 }
 
@@ -108,30 +96,67 @@ void castExact(const EvidentialOcTree& tree, const std::vector<octomap::point3d>
   }
 }
 
-// Fast: each ray is traced from its end back towards the origin and stops after
-// kFastFreeCollisions consecutive cells this thread has already marked free in this scan (the
-// voxblox "fast" integrator's rule): near the sensor the rays of a scan overlap, so most of a
-// ray's cells repeat those of its neighbours. Cells a stopped ray would have reached alone stay
-// unobserved this scan. Static chunks, so the map does not depend on thread timing.
+// Which 8x8x8 blocks of the tree (the bricks of voxel_bricks.h) hold a voxel that is occupied or
+// has semantics, read from the node three levels above the leaves: an inner node's log-odds is
+// its children's maximum and it carries a payload when any leaf below it does. The map as it was
+// before the scan; one direct-mapped cache per thread and scan (a ray stays in a block for
+// several cells, and neighbouring rays cross the same blocks).
+class HeldBlocks {
+ public:
+  explicit HeldBlocks(const EvidentialOcTree& tree) : tree_(tree), codes_(kSlots, kEmpty) {}
+  bool holds(const octomap::OcTreeKey& key) {
+    const uint64_t code = uint64_t(key[0] >> 3) | uint64_t(key[1] >> 3) << 13 |
+                          uint64_t(key[2] >> 3) << 26;
+    const size_t slot = (code * 0x9E3779B97F4A7C15ull) >> (64 - kSlotBits);
+    if (codes_[slot] != code) {
+      const EvidentialOcTreeNode* node = tree_.search(key, tree_.getTreeDepth() - 3);
+      codes_[slot] = code;
+      held_[slot] = node && (tree_.isNodeOccupied(node) || node->hasSemantics());
+    }
+    return held_[slot];
+  }
+
+ private:
+  static constexpr int kSlotBits = 14;
+  static constexpr size_t kSlots = size_t(1) << kSlotBits;
+  static constexpr uint64_t kEmpty = ~uint64_t(0);
+  const EvidentialOcTree& tree_;
+  std::vector<uint64_t> codes_;
+  std::bitset<kSlots> held_;
+};
+
+// Fast: each ray's cells (OctoMap's, as in the exact mode) are walked from its end back towards
+// the origin, and the walk takes the shortcut after kFastFreeCollisions consecutive cells this
+// thread has already marked free in this scan (the voxblox "fast" integrator's rule): near the
+// sensor the rays of a scan overlap, so most of a ray's cells repeat those of its neighbours.
+// Past the shortcut the ray still clears every cell in a block that holds something
+// (HeldBlocks): an occupied voxel or class evidence that a mover left behind is cleared as in
+// the exact mode; only space that is free and holds no semantics is skipped (cells only a
+// shortcut ray crosses there stay unobserved this scan). Static chunks, so the map does not
+// depend on thread timing.
 void castFast(const EvidentialOcTree& tree, const std::vector<octomap::point3d>& points_W,
               const octomap::point3d& origin_W, double max_range, bool discretize,
               VoxelBricks* bricks) {
-  octomap::OcTreeKey origin_key;
-  if (!tree.coordToKeyChecked(origin_W, origin_key)) return;
+  HeldBlocks held(tree);
+  std::vector<octomap::OcTreeKey> keys;
+  keys.reserve(1024);
 #pragma omp for schedule(static, 512)
   for (size_t i = 0; i < points_W.size(); ++i) {
     if (discretize && bricks->testAndSet(tree.coordToKey(points_W[i]), kRayEndCast)) continue;
     const RayEnd ray = rayEnd(tree, points_W[i], origin_W, max_range, discretize);
     octomap::OcTreeKey end_key;
     if (!tree.coordToKeyChecked(ray.end, end_key)) continue;
-    if (end_key != origin_key) bricks->testAndSet(origin_key, kRayFree);
-    // Reversed, the first cell is the end voxel (not free) and the origin's is not visited.
+    keys.clear();
+    traceRay(tree, origin_W, ray.end, [&](const octomap::OcTreeKey& key) { keys.push_back(key); });
     int collisions = 0;
-    traceRay(tree, ray.end, origin_W, [&](const octomap::OcTreeKey& key) {
-      if (key == end_key) return true;
-      collisions = bricks->testAndSet(key, kRayFree) ? collisions + 1 : 0;
-      return collisions < kFastFreeCollisions;
-    });
+    for (size_t k = keys.size(); k-- > 1;) {
+      if (collisions < kFastFreeCollisions) {
+        collisions = bricks->testAndSet(keys[k], kRayFree) ? collisions + 1 : 0;
+      } else if (held.holds(keys[k])) {
+        bricks->testAndSet(keys[k], kRayFree);
+      }
+    }
+    if (!keys.empty()) bricks->testAndSet(keys[0], kRayFree);  // the origin's cell
     if (ray.occupied) bricks->testAndSet(end_key, kRayOccupied);
   }
 }

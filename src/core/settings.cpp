@@ -123,14 +123,15 @@ std::vector<Setting> makeList() {
           "elsewhere are answered from them (about half the insert CPU; not exact)"),
     // --- how an insert runs (never stored) ---
     Entry("fast_free_space", &InsertSettings::fast_free_space, kInsert,
-          "Fast free space for live use: rays stop in space this scan already cleared (not exact)"),
+          "Fast free space for live use: rays take a shortcut through space this scan already "
+          "cleared, except where the map holds an occupied voxel or semantics (not exact)"),
     Entry("evidence_floor", &InsertSettings::evidence_floor, kInsert,
           "Point evidence below this counts as 0 (0: off; 0.01 makes learned evidence about as "
           "cheap as one-hot)")
         .range({0.0, kInf, false, true, kNaN, "finite and >= 0 (0: off)"}),
     Entry("clearing_observations", &InsertSettings::clearing_observations, kInsert,
-          "Clearings (rays passing through) after which a voxel's class evidence is gone: "
-          "moving objects leave no ghosts (0: off; sequential mapping only)")
+          "Clearings (rays passing through, leaving it free) after which a voxel's class evidence "
+          "is gone: moving objects leave no ghosts (0: off; sequential mapping only)")
         .range({0.0, double(InsertSettings::kMaxClearingObservations), false, false, kNaN,
                 "in [0, 1000] (0: off)"}),
     Entry("other_class_weight", &InsertSettings::other_class_weight, kInsert,
