@@ -8,6 +8,7 @@
 //   evidential_sequence_bench --data out/long --classes out/long/classes.yaml --order forward
 //   evidential_sequence_bench ... --only exact   # one method alone: its RSS after every step
 //   evidential_sequence_bench ... --methods plain,exact,occupied_only
+//   evidential_sequence_bench ... --methods plain,live,live_full_rays
 //   evidential_sequence_bench ... --only local --radius 60 --tile-dir out/tiles --save out/g.ot
 //     (local: the exact insert in a LocalMap; --save writes the method's whole map at the end,
 //      for exact the map, for local the global map merged from the tiles, both fully pruned)
@@ -96,6 +97,15 @@ std::unique_ptr<evbench::Method> liveVolumeMethod(double range) {
   return m;
 }
 
+// The live launch's settings with every ray cast in full (fast_free_space off).
+std::unique_ptr<evbench::Method> liveFullRaysMethod(double range) {
+  auto m = evbench::liveMethod(range, false);
+  m->key = "live_full_rays";
+  m->label = "live launch settings without fast_free_space";
+  static_cast<evbench::SemanticMethod&>(*m).config.fast_free_space = false;
+  return m;
+}
+
 // The exact insert in a map that keeps only the region around the sensor in memory.
 struct LocalMethod : evbench::SemanticMethod {
   std::string tile_dir;
@@ -154,10 +164,12 @@ std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
       out.push_back(occupiedOnlyMethod(o.range));
     else if (key == "live_volume")
       out.push_back(liveVolumeMethod(o.range));
+    else if (key == "live_full_rays")
+      out.push_back(liveFullRaysMethod(o.range));
     else if (key == "local")
       out.push_back(localMethod(o));
     else
-      throw std::invalid_argument("methods are plain, exact, live, occupied_only, live_volume, local: " + key);
+      throw std::invalid_argument("methods are plain, exact, live, live_full_rays, occupied_only, live_volume, local: " + key);
   }
   return out;
 }
