@@ -73,17 +73,6 @@ def ros2_rate():
                                                                   commit, date))
 
 
-def clearing_ghosts():
-    text, link, commit, date = record("clearing_observations.md")
-    on, = find(r"\*\*([\d.]+ %)\*\* of the freed swept volume still answers `person`", text,
-               "clearing_observations.md")
-    off, = find(r"with the mode off (over [\d.]+ %) still answer `person`", text,
-                "clearing_observations.md")
-    return ("On the synthetic street, %s of the volume the person freed still answers `person` "
-            "with K = 3 or 5, against %s with the mode off (%s, commit %s, %s)." % (
-                on, off, link, commit, date))
-
-
 def local_map_memory():
     text, link, commit, date = record("local_map.md")
     local = row(text, "semantic insert, LocalMap radius 60 m (tiles on disk)", "local_map.md")
@@ -156,7 +145,7 @@ def data_presets():
                 good[2], good[3], poor[2], poor[3], link, commit, date))
 
 
-FIGURES = {f.__name__: f for f in (live_rate, ros2_rate, clearing_ghosts, local_map_memory,
+FIGURES = {f.__name__: f for f in (live_rate, ros2_rate, local_map_memory,
                                    error_model, learned_heldout, speed, cutoff, merge_equality,
                                    data_presets)}
 

@@ -164,12 +164,11 @@ std::string MapOutputs::readAndSendViews(const ViewPlan& plan, const ClassTable&
       readChunk(tree, chunk, config_.occupancy_band, plan.occupied ? &occupied : nullptr,
                 plan.free ? &free : nullptr);
     });
-  const bool due_uncertainty = plan.isDue(&uncertainty_markers_);
   const std::string& frame = config_.frame_id;
   if (plan.isDue(&semantic_markers_))
     stampAndSend(&semantic_markers_, semanticMarkers(occupied, classes, frame, plan.depth),
                  plan.stamp);
-  if (due_uncertainty) {
+  if (plan.isDue(&uncertainty_markers_)) {
     const UncertaintyView view = config_.uncertainty_view;
     const UncertaintyRange range = resolveRange(occupied, config_.uncertainty_range, view);
     stampAndSend(&uncertainty_markers_, uncertaintyMarkers(occupied, range, view, frame, plan.depth),
