@@ -26,8 +26,8 @@ bool rayKeys(const EvidentialOcTree& tree, const octomap::point3d& origin,
              const octomap::point3d& end, std::vector<octomap::OcTreeKey>* keys);
 
 // Fast free space: a ray traced back from its end takes the shortcut after this many
-// consecutive cells already marked free in the same scan; past it, it clears only the cells of
-// blocks that hold an occupied voxel or semantics.
+// consecutive cells already marked free in the same scan; past it, it clears only the voxels it
+// crosses that are occupied or hold semantics.
 constexpr int kFastFreeCollisions = 2;
 
 // Casts the rays of points_W (finite, inside the tree's key range) from origin_W. per_thread
