@@ -46,7 +46,23 @@ struct Dda {
     return dim;
   }
   double exit() const { return std::min(std::min(t_max[0], t_max[1]), t_max[2]); }
+  // After advance() along `dim`: the cube the ray touches at an edge or corner of the grid as it
+  // crosses that face (another axis's face crossed within `eps` of it), else false. There the
+  // exact DDA may have taken either neighbour; walks that do not start from the origin touch
+  // both.
+  bool touchedAtEdge(unsigned dim, double eps, octomap::OcTreeKey* key) const {
+    for (unsigned j = 0; j < 3; ++j) {
+      if (j == dim || !(t_max[j] - t_entry < eps)) continue;
+      (*key)[dim] -= step[dim];
+      (*key)[j] += step[j];
+      return true;
+    }
+    return false;
+  }
 };
+
+// Within this of a voxel edge (in t, metres per resolution), a walk touches both neighbours.
+constexpr double kEdgeTolerance = 1e-4;
 
 Dda voxelDda(const EvidentialOcTree& tree, const octomap::point3d& from,
              const octomap::point3d& dir, const octomap::OcTreeKey& key) {
@@ -197,12 +213,15 @@ double walkBackFromEnd(const EvidentialOcTree& tree, const octomap::point3d& end
                        const octomap::OcTreeKey& end_key, const octomap::OcTreeKey& origin_key,
                        const octomap::point3d& dir, float length, VoxelBricks* bricks) {
   Dda back = voxelDda(tree, end, -dir, end_key);
+  const double edge = kEdgeTolerance * tree.getResolution();
   octomap::OcTreeKey key = end_key;
   int collisions = 0;
   while (true) {
     const unsigned dim = back.advance();
     key[dim] += back.step[dim];
     if (key == origin_key || back.t_entry > length) return -1.0;
+    octomap::OcTreeKey touched = key;
+    if (back.touchedAtEdge(dim, edge, &touched)) bricks->testAndSet(touched, kRayFree);
     collisions = bricks->testAndSet(key, kRayFree) ? collisions + 1 : 0;
     if (collisions >= kFastFreeCollisions) return length - back.t_entry;
   }
@@ -237,13 +256,19 @@ void clearInBlock(const EvidentialOcTree& tree, const octomap::point3d& origin,
   const float t_start = float(std::max(t_a - 1e-3 * tree.getResolution(), 0.0));
   octomap::OcTreeKey key = tree.coordToKey(origin + dir * t_start);
   Dda voxels = voxelDda(tree, origin, dir, key);
+  const double edge = kEdgeTolerance * tree.getResolution();
+  const auto clear = [&](const octomap::OcTreeKey& k) {
+    const bool in_block = (k[0] >> 3) == (corner[0] >> 3) && (k[1] >> 3) == (corner[1] >> 3) &&
+                          (k[2] >> 3) == (corner[2] >> 3);
+    if (in_block && block.isSet(k)) bricks->testAndSet(k, kRayFree);
+  };
   while (true) {
-    const bool in_block = (key[0] >> 3) == (corner[0] >> 3) && (key[1] >> 3) == (corner[1] >> 3) &&
-                          (key[2] >> 3) == (corner[2] >> 3);
-    if (in_block && block.isSet(key)) bricks->testAndSet(key, kRayFree);
+    clear(key);
     if (voxels.exit() >= t_b) return;
     const unsigned dim = voxels.advance();
     key[dim] += voxels.step[dim];
+    octomap::OcTreeKey touched = key;
+    if (voxels.touchedAtEdge(dim, edge, &touched)) clear(touched);
   }
 }
 
