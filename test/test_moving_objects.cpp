@@ -354,6 +354,25 @@ TEST(ClearingDiscount, KeepsTheClassSharesAndRaisesUncertainty) {
   EXPECT_GT(tree.query(key).uncertainty, u_before);
 }
 
+// Contextual discounting: a class that this scan's kernel row still gives the cleared voxel (a
+// static surface beside it, seen again) keeps what the voxel held; the others are discounted as
+// when no row comes, and the row is added after.
+TEST(ClearingDiscount, ClassesTheScanStillShowsKeepTheirEvidence) {
+  EvidentialOcTree tree = streetMap(kClearings);
+  const octomap::OcTreeKey key(32768, 32768, 32768);
+  const std::vector<double> held{1.0, 0.5, 2.0, 0.3};
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, -1, 0}}, held, false);
+  const std::vector<double> row{0.0, 0.0, 0.4, 0.05};  // shows class 2; class 3 too little
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, -1, 0}}, row, false);
+  const std::vector<float> after = tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
+  const double keep = tree.config().clearingKeep();
+  ASSERT_LT(keep, 0.5);
+  EXPECT_NEAR(after[0], 1.0 * keep, 1e-6);
+  EXPECT_NEAR(after[1], 0.5 * keep, 1e-6);
+  EXPECT_NEAR(after[2], 2.0 + 0.4, 1e-6);
+  EXPECT_NEAR(after[3], 0.3 * keep + 0.05, 1e-6);
+}
+
 // A surface that rays sometimes graze: a miss that leaves the voxel occupied is no clearing of
 // its class.
 TEST(ClearingDiscount, OccupiedVoxelKeepsItsEvidenceWhenARayGrazesIt) {

@@ -283,8 +283,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   void addToLeaf(EvidentialOcTreeNode* leaf, const float* from, Edit& edit);
   void releaseLeafPayload(EvidentialOcTreeNode* leaf, Edit& edit);
   // A clearing observation of a leaf: its payload discounted, released below kReleasedEvidence
-  // (SemanticConfig::clearing_observations; clearing_discount.cpp).
-  void discountClearedLeaf(EvidentialOcTreeNode* leaf, Edit& edit);
+  // (SemanticConfig::clearing_observations; clearing_discount.cpp); `increments`: this scan's
+  // kernel row for the leaf (C values), or nullptr.
+  void discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments, Edit& edit);
   bool discountsClearings() const { return config_.clearing_observations > 0; }
   void expandLeaf(EvidentialOcTreeNode* node, Edit& edit);
   bool pruneChildren(EvidentialOcTreeNode* node, Edit& edit);  // when isNodeCollapsible

@@ -139,10 +139,11 @@ struct InsertSettings {
   // new evidence the voxel answers no class (its payload is released; a surface map,
   // semantic_occupied_only, keeps a vacuous one so that the voxel, seen empty, is not answered
   // from the surface around it). A surface that rays graze stays occupied and keeps its class;
-  // the kernel evidence a scan spreads into a free voxel is kept for that scan. Discounting keeps
-  // every class's share (dempster: L^c scaled; sbki/ebs: alpha^c - prior scaled). 0: off, the
-  // default: on the bundled static street K = 3 costs 0.8 (one-hot) to 2.0 (learned) points of
-  // mIoU and 0.02 of Brier score, outside the bootstrap intervals (docs/long_missions.md). An
+  // the kernel evidence a scan spreads into a free voxel is kept for that scan, and a class that
+  // scan's kernel row shows keeps what the voxel held (contextual discounting; the other classes
+  // keep their shares: dempster L^c scaled, sbki/ebs alpha^c - prior scaled). 0: off, the
+  // default: on the bundled static street K = 3 costs mIoU and Brier score outside the bootstrap
+  // intervals (docs/experiments/clearing_static_cost.md, docs/long_missions.md). An
   // insertion setting: not stored in the map. Sequential mapping only: a merge of chunk maps
   // cannot apply one chunk's clearings to another chunk's evidence, so batch mapping equals
   // sequential mapping with this setting at 0.

@@ -333,15 +333,17 @@ size_t EvidentialOcTree::updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdat
   // (a mover has gone) forgets it.
   const bool cleared = update.occupancy < 0 && discountsClearings() && !isNodeOccupied(leaf);
   if (update.increments == VoxelUpdate::kNoIncrements) {
-    if (cleared) discountClearedLeaf(leaf, edit);
+    if (cleared) discountClearedLeaf(leaf, nullptr, edit);
     return 0;
   }
-  // What the voxel held before this scan is discounted; the kernel evidence this scan's points
-  // spread into it is what a surface next to it gives its free space now.
-  if (cleared) discountClearedLeaf(leaf, edit);
+  // What the voxel held before this scan is discounted, but for the classes this scan's points
+  // around it still show; their kernel evidence is what a surface next to it gives its free
+  // space now.
+  const double* increments = batch.rows + size_t(update.increments) * num_classes_;
+  if (cleared) discountClearedLeaf(leaf, increments, edit);
   float values[kMaxClasses];
   leafValues(leaf, values);
-  rule_->add(values, batch.rows + size_t(update.increments) * num_classes_, num_classes_);
+  rule_->add(values, increments, num_classes_);
   storeLeafValues(leaf, values, edit);
   return 1;
 }
