@@ -481,6 +481,7 @@ std::map<uint32_t, std::vector<double>> subtreeRows(const KernelPass& kernel,
              KernelPass::sameGroup(points[j - n], points[j]));
     kernel.scatter(group, n, base, &rows);
   }
+  kernel.flushOneHot(&rows);
   KernelPass::clearClasses(&rows);
   kernel.finishRows(&rows);
   std::map<uint32_t, std::vector<double>> out;

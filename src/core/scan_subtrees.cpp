@@ -219,6 +219,7 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
                                    (*kernel_points_)[point_subtrees_[p].second]));
     kernel_->scatter(group, n, base, &kernel);
   }
+  kernel_->flushOneHot(&kernel);
   if (class_aware) KernelPass::clearClasses(&kernel);
   t.most_row_values = std::max(t.most_row_values, kernel.rows.size());
   t.most_rows = std::max(t.most_rows, kernel.touched.size());
