@@ -412,38 +412,11 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
 }
 
 // The axis terms of one member of a group, d^2 per axis offset from the group's first point
-// (as scatterWith's, +inf beyond the member's reach), and its reach along x.
+// (as scatterWith's, +inf beyond the member's reach).
 struct MemberTerms {
   const double* axis[3];  // indexed by the offset from the group's first point
-  int x_lo, x_hi;         // its x offsets within the group's (and the subtree's) bounds
-  int nearest_x;          // its smallest x term: its own column, or the subtree's edge nearest
-  int first_x, last_x;    // the ends of its interval on the last line it crossed
+  double syz;             // its y + z term on the line at hand
 };
-
-// The member's voxels on a line whose y + z term is syz, as bits of local x (x0: the local x of
-// offset 0): the offsets where s = x term + syz is below 1 (elsewhere its table gives exactly
-// 0). They are an interval around its smallest x term, since the term grows away from it, and
-// their ends move little from line to line: found from the last line's.
-static uint64_t supportOnLine(MemberTerms& t, double syz, int x0) {
-  const double* x_term = t.axis[0];
-  const auto inside = [&](int o) { return x_term[o] + syz < 1.0; };
-  if (!inside(t.nearest_x)) return 0;
-  int a = t.first_x, b = t.last_x;
-  if (inside(a)) {
-    while (a > t.x_lo && inside(a - 1)) --a;
-  } else {
-    while (!inside(a)) ++a;
-  }
-  if (inside(b)) {
-    while (b < t.x_hi && inside(b + 1)) ++b;
-  } else {
-    while (!inside(b)) --b;
-  }
-  t.first_x = a;
-  t.last_x = b;
-  const int width = b - a + 1;
-  return (width >= 64 ? ~uint64_t(0) : (uint64_t(1) << width) - 1) << (x0 + a);
-}
 
 void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::OcTreeKey& base,
                                KernelRows* out) const {
@@ -486,11 +459,6 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
         const double gap = to_cube_ ? std::max(std::fabs(double(d)) - half, 0.0) : double(d);
         axis[o] = gap * gap * inv_length2;
       }
-      if (a == 0) {
-        t.x_lo = std::max(lo[0], at - point.reach[0]);
-        t.x_hi = std::min(hi[0], at + point.reach[0]);
-        t.nearest_x = t.first_x = t.last_x = std::clamp(at, t.x_lo, t.x_hi);
-      }
     }
   }
   // The members share a class and an evidence value: one table (two when class-aware).
@@ -507,8 +475,7 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
   const int reach_x = hi[0] - lo[0] + 1;
   const uint64_t reachable = (reach_x >= 64 ? ~uint64_t(0) : (uint64_t(1) << reach_x) - 1)
                              << (x0 + lo[0]);
-  // Per local x of the line at hand, the sum of the members' increments; 0 between lines.
-  double line_sum[kSize] = {};
+  int on_line[kMaxGroup];  // the members within the support on the line at hand
   const int reach_y = hi[1] - lo[1] + 1;
   const uint64_t reachable_y = (reach_y >= 64 ? ~uint64_t(0) : (uint64_t(1) << reach_y) - 1)
                                << (y0 + lo[1]);
@@ -517,41 +484,36 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
     for (uint64_t lines = out->kept_lines[z0 + oz] & reachable_y; lines; lines &= lines - 1) {
       const int oy = __builtin_ctzll(lines) - y0;
       const uint32_t line = uint32_t((z0 + oz) << kSubtreeLevels | (y0 + oy));
-      uint64_t kept = (out->masked ? out->mask[line] : ~uint64_t(0)) & reachable;
+      const uint64_t kept = (out->masked ? out->mask[line] : ~uint64_t(0)) & reachable;
       if (!kept) continue;
-      // The kept voxels that hold another class than the group's: the weaker table there (or
-      // none at other_class_weight 0).
-      uint64_t weaker = 0;
-      for (uint64_t w = own_class ? out->weaker_lines[line] & kept : 0; w; w &= w - 1) {
-        const int x = __builtin_ctzll(w);
-        if (out->classes_weaker[paddedIndex(x, y0 + oy, z0 + oz)] & own_class)
-          weaker |= uint64_t(1) << x;
-      }
-      if (other_class_weight_ <= 0.0) kept &= ~weaker;
-      // Member by member, only the voxels of its support (s < 1: elsewhere its table gives
-      // exactly 0), summed per voxel in member order as one voxel's sum would be.
-      uint64_t reached = 0;
+      // The members whose support crosses this line; every kept voxel of the group's reach on
+      // it is summed over them without a branch (its table gives 0 beyond a support), which
+      // costs less than finding each member's interval on each line.
+      int members = 0;
       for (int i = 0; i < n; ++i) {
         MemberTerms& t = terms[i];
-        const double syz = t.axis[2][oz] + t.axis[1][oy];
-        if (!(syz < 1.0)) continue;
-        uint64_t inside = supportOnLine(t, syz, x0) & kept;
-        reached |= inside;
-        const double* x_term = t.axis[0] - x0;  // by local x
-        for (; inside; inside &= inside - 1) {
-          const int x = __builtin_ctzll(inside);
-          const OneHotTable::Step* steps = weaker >> x & 1 ? weaker_steps : full_steps;
-          line_sum[x] += OneHotTable::at(steps, x_term[x] + syz);
-        }
+        t.syz = t.axis[2][oz] + t.axis[1][oy];
+        if (t.syz < 1.0) on_line[members++] = i;
       }
-      // Voxels whose sum is not positive get no row from this group (as from the full loop).
-      uint64_t summed = 0;
+      if (!members) continue;
+      const uint64_t weaker_line = own_class ? out->weaker_lines[line] : 0;
       double* class_sums = &out->class_sums[size_t(line) << kSubtreeLevels];
-      for (; reached; reached &= reached - 1) {
-        const int x = __builtin_ctzll(reached);
-        const double sum = line_sum[x];
-        line_sum[x] = 0.0;
-        if (!(sum > 0.0)) continue;
+      uint64_t summed = 0;  // the voxels this group adds to
+      for (uint64_t voxels = kept; voxels; voxels &= voxels - 1) {
+        const int x = __builtin_ctzll(voxels);
+        const OneHotTable::Step* steps = full_steps;
+        if ((weaker_line >> x & 1) &&
+            (out->classes_weaker[paddedIndex(x, y0 + oy, z0 + oz)] & own_class)) {
+          if (other_class_weight_ <= 0.0) continue;
+          steps = weaker_steps;
+        }
+        // No branch per member: beyond its support (or reach: +inf) its table gives 0.
+        double sum = 0.0;
+        for (int m = 0; m < members; ++m) {
+          const MemberTerms& t = terms[on_line[m]];
+          sum += OneHotTable::at(steps, t.axis[0][x - x0] + t.syz);
+        }
+        if (!(sum > 0.0)) continue;  // no row from this group, as from the full loop
         summed |= uint64_t(1) << x;
         class_sums[x] += sum;
       }

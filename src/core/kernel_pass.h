@@ -16,12 +16,11 @@
 // a given evidence e and class weight w, so it is tabulated over s as k is (OneHotTable: no
 // division and no product per voxel, within the same error bound per contribution), and the
 // points of one 2 x 2 x 2 block (a down-sampling cell: up to 6 points) with the same class and
-// evidence are scattered as a group: member by member along each line of kept voxels, only over
-// its support's interval there, into a sum per voxel of the line. A subtree's groups wait until
-// its last scatter and then go class by class, each class's in scatter order, into a dense sum
-// per voxel, so a row is looked up and written once per class (not once per group) and holds
-// the same sums bit for bit; rows of one-hot groups alone are C wide from the start (no running
-// products to finish). Private to the core.
+// evidence are scattered as a group, the sum of its members' increments per voxel. A subtree's
+// groups wait until its last scatter and then go class by class, each class's in scatter order,
+// into a dense sum per voxel, so a row is looked up and written once per class (not once per
+// group) and holds the same sums bit for bit; rows of one-hot groups alone are C wide from the
+// start (no running products to finish, half the memory to fill). Private to the core.
 #pragma once
 
 #include <algorithm>
