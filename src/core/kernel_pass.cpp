@@ -280,7 +280,7 @@ void KernelPass::clearClasses(KernelRows* rows) {
 template <class Contribution>
 void finishRowsWith(int num_classes, KernelRows* out) {
   if constexpr (Contribution::kRowWidth > 1) {
-    if (out->narrow) return;  // the increments already
+    if (out->narrow) return;  // already the C increments
     const size_t width = size_t(Contribution::kRowWidth) * num_classes;
     const size_t rows = out->touched.size();
     for (size_t r = 0; r < rows; ++r) {

@@ -167,8 +167,9 @@ class KernelPass {
   void scatter(const KernelMember* group, int n, const octomap::OcTreeKey& base,
                KernelRows* rows) const;
   // After the last scatter of a subtree, before clearClasses: the one-hot groups' contributions,
-  // class by class, each class's in the groups' order (so each row's sums are those of scattering
-  // them at once, bit for bit).
+  // class by class, each class's in the groups' order, so each row gets the sums it got when
+  // they were scattered at once, in the same order (bit for bit; only a general point's running
+  // product folded into its log-evidence, at evidence near FLT_MAX, now precedes them).
   void flushOneHot(KernelRows* rows) const;
   // After flushOneHot: C increments per row (KernelRows::rows), as the rule's add() takes them.
   void finishRows(KernelRows* rows) const;

@@ -279,7 +279,10 @@ size_t ScanSubtrees::capacityBytes() const {
     const KernelRows& k = t.kernel;
     bytes += vectorBytes(k.mask) + vectorBytes(k.index) + vectorBytes(k.touched) +
              vectorBytes(k.rows) + vectorBytes(k.axis_terms) + vectorBytes(k.classes) +
-             vectorBytes(k.classes_touched) + vectorBytes(t.order) +
+             vectorBytes(k.classes_touched) + vectorBytes(k.pending_members) +
+             vectorBytes(k.pending) + vectorBytes(k.pending_order) + vectorBytes(k.class_sums) +
+             vectorBytes(k.class_lines) + vectorBytes(k.lines_touched) +
+             vectorBytes(k.kept_lines) + vectorBytes(t.order) +
              vectorBytes(t.order_buffer) + vectorBytes(t.updates);
   }
   return bytes;
