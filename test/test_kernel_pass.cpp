@@ -12,6 +12,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 #include <tuple>
 #include <vector>
 
@@ -557,11 +558,15 @@ TEST(KernelPass, OneHotRoadStaysWithinTheTableErrorOfTheGeneralLoopOnARealScan) 
   kernel.preparePoints(semantic, 2, &points);
   ASSERT_GT(points.size(), 30000u);
   std::vector<KernelPoint> general = points;
+  // Every third point on the general loop, between the groups: one-hot sums into the rows those
+  // points made, 2 C wide, and a running product finished on top of them.
+  std::vector<KernelPoint> mixed = points;
   size_t one_hot = 0, grouped = 0;
   for (size_t j = 0; j < points.size(); ++j) {
     one_hot += points[j].table >= 0 ? 1 : 0;
     grouped += j > 0 && KernelPass::sameGroup(points[j - 1], points[j]) ? 1 : 0;
     general[j].table = -1;
+    if (j % 3 == 0) mixed[j].table = -1;
   }
   EXPECT_EQ(one_hot, points.size());      // derived evidence: every point one-hot, one value
   EXPECT_GT(grouped, points.size() / 3);  // groups are common
@@ -579,19 +584,23 @@ TEST(KernelPass, OneHotRoadStaysWithinTheTableErrorOfTheGeneralLoopOnARealScan) 
           static_cast<octomap::key_type>((sensor[0] / size + dx) * size),
           static_cast<octomap::key_type>((sensor[1] / size + dy) * size),
           static_cast<octomap::key_type>((sensor[2] / size - 1) * size));
-      const auto fast = subtreeRows(kernel, points, semantic, base, num_classes);
       const auto reference = subtreeRows(kernel, general, semantic, base, num_classes);
       const std::vector<int> contributions = contributionsPerVoxel(tree, points, semantic, base);
-      ASSERT_EQ(fast.size(), reference.size());
-      for (const auto& [local, row] : reference) {
-        const auto other = fast.find(local);
-        ASSERT_NE(other, fast.end()) << "voxel " << local;
-        const double bound = 2.0 * per_contribution * contributions[local];
-        for (int c = 0; c < num_classes; ++c) {
-          const double difference = std::fabs(other->second[c] - row[c]);
-          worst = std::max(worst, difference);
-          if (row[c] > 1e-3) worst_relative = std::max(worst_relative, difference / row[c]);
-          ASSERT_LE(difference, bound + 1e-12 * row[c]) << "voxel " << local << " class " << c;
+      for (const auto* road : {&points, &mixed}) {
+        const auto fast = subtreeRows(kernel, *road, semantic, base, num_classes);
+        const char* what = road == &points ? "one-hot" : "mixed";
+        ASSERT_EQ(fast.size(), reference.size()) << what;
+        for (const auto& [local, row] : reference) {
+          const auto other = fast.find(local);
+          ASSERT_NE(other, fast.end()) << what << " voxel " << local;
+          const double bound = 2.0 * per_contribution * contributions[local];
+          for (int c = 0; c < num_classes; ++c) {
+            const double difference = std::fabs(other->second[c] - row[c]);
+            worst = std::max(worst, difference);
+            if (row[c] > 1e-3) worst_relative = std::max(worst_relative, difference / row[c]);
+            ASSERT_LE(difference, bound + 1e-12 * row[c])
+                << what << " voxel " << local << " class " << c;
+          }
         }
       }
       voxels += reference.size();
@@ -602,6 +611,40 @@ TEST(KernelPass, OneHotRoadStaysWithinTheTableErrorOfTheGeneralLoopOnARealScan) 
   RecordProperty("worst_difference", text.str());
   RecordProperty("points_grouped_with_the_previous",
                  std::to_string(grouped) + " of " + std::to_string(points.size()));
+}
+
+// A subtree's one-hot groups wait for flushOneHot, which needs the class-aware marks that
+// clearClasses resets: clearing them first, or scattering into the next subtree, is an error.
+TEST(KernelPass, OneHotGroupsMustBeFlushedBeforeTheClassesAreCleared) {
+  const RealScan scan = loadRealScan();
+  SemanticConfig config;
+  EvidentialOcTree tree(0.2, scan.classes.numClasses(), config);
+  KernelPass kernel(config, tree);
+  SemanticPoints semantic;
+  semantic.positions = scan.raw.positions;
+  semantic.evidence = scan.raw.evidence;
+  std::vector<KernelPoint> points;
+  kernel.preparePoints(semantic, 2, &points);
+  ASSERT_GE(points[0].table, 0);
+  KernelRows rows;
+  rows.index.assign(size_t(1) << (3 * kSubtreeLevels), KernelRows::kNone);
+  const int size = 1 << kSubtreeLevels;
+  const octomap::OcTreeKey base(
+      static_cast<octomap::key_type>(points[0].key[0] / size * size),
+      static_cast<octomap::key_type>(points[0].key[1] / size * size),
+      static_cast<octomap::key_type>(points[0].key[2] / size * size));
+  const KernelMember member{&points[0], &semantic.positions[0]};
+  kernel.markClasses(points[0], base, &rows);
+  KernelPass::holdClasses(&rows);
+  kernel.scatter(&member, 1, base, &rows);
+  const octomap::OcTreeKey next(static_cast<octomap::key_type>(base[0] + size), base[1], base[2]);
+  EXPECT_THROW(kernel.scatter(&member, 1, next, &rows), std::logic_error);
+  EXPECT_THROW(KernelPass::clearClasses(&rows), std::logic_error);
+  kernel.flushOneHot(&rows);
+  EXPECT_NO_THROW(KernelPass::clearClasses(&rows));
+  kernel.finishRows(&rows);
+  EXPECT_GT(rows.touched.size(), 0u);
+  EXPECT_EQ(rows.rows.size(), rows.touched.size() * scan.classes.numClasses());
 }
 
 // The map of a real scan's points ahead of the sensor (scan 0, one-hot evidence x 20: every
