@@ -162,8 +162,8 @@ class KernelPass {
   }
   // Adds the contributions of the n (<= kMaxGroup) points of `group` (one point, or points of
   // which each is sameGroup as the first) to the voxels of the subtree whose first voxel is
-  // `base` (64^3 voxels, kSubtreeLevels) into `rows`; a one-hot group's at flushOneHot. The
-  // members must outlive that.
+  // `base` (64^3 voxels, kSubtreeLevels) into `rows`; a one-hot group's at flushOneHot (the
+  // points and positions its members name must live until then).
   void scatter(const KernelMember* group, int n, const octomap::OcTreeKey& base,
                KernelRows* rows) const;
   // After the last scatter of a subtree, before clearClasses: the one-hot groups' contributions,
