@@ -5,16 +5,18 @@
 # (revisit, 30 inserts: first pass 0-9, steady state 10-29) and on a SYNTHETIC generated
 # off-road sequence (os1-64 forest, 40 scans, each once: first 10, then 10-39), how the two
 # builds' maps differ (evidential_map_diff), the perf profile of each (scripts/bench_profile.sh);
-# CSV files and meta.txt (commits, load average, commands) into OUT, then
-# docs/experiments/kernel_one_hot.md with bench/kernel_ab_report.py.
+# CSV files and meta.txt (commits, load average, commands) into OUT, then the record
+# docs/experiments/RECORD.md (default kernel_one_hot, titled TITLE) with bench/kernel_ab_report.py.
 #
-#   scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT   # ~20 min at load 13 on 2 cores
+#   scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT [RECORD [TITLE]]   # ~20 min at load 13
 # Outside CI; CLI (for generating the sequence): EVIDENTIAL_OCTOMAP_CLI or build/core's.
 set -euo pipefail
 
 before="$(realpath "$1")"
 after="$(realpath "$2")"
 out="$(mkdir -p "$3" && cd "$3" && pwd)"
+record="${4:-kernel_one_hot}"
+title="${5:-}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cli="${EVIDENTIAL_OCTOMAP_CLI:-${root}/build/core/src/tools/evidential_octomap}"
 offroad="${out}/forest40"
@@ -68,6 +70,8 @@ for which in before after; do
     "load $(load)"
   bash "${root}/scripts/bench_profile.sh" "${bin}" "${out}/prof_${which}" >/dev/null
 done
-python3 "${root}/bench/kernel_ab_report.py" "${out}" \
-  --command "scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT" \
-  >"${root}/docs/experiments/kernel_one_hot.md"
+command="scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT"
+[[ $# -ge 4 ]] && command+=" ${record}"
+[[ -n "${title}" ]] && command+=" '${title}'"
+python3 "${root}/bench/kernel_ab_report.py" "${out}" --command "${command}" \
+  ${title:+--title "${title}"} >"${root}/docs/experiments/${record}.md"

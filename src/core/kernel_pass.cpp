@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <utility>
 
 #include "evidential_octomap/sparse_kernel.h"
@@ -131,7 +132,17 @@ void KernelPass::buildOneHotTables(std::vector<KernelPoint>* points) {
 
 void KernelPass::scatter(const KernelMember* group, int n, const octomap::OcTreeKey& base,
                          KernelRows* out) const {
-  if (group[0].point->table >= 0) return scatterOneHot(group, n, base, out);
+  if (group[0].point->table >= 0) {
+    if (out->pending.empty()) {
+      out->pending_base = base;
+    } else if (!(out->pending_base == base)) {
+      throw std::logic_error("KernelPass::scatter: flushOneHot before the next subtree");
+    }
+    out->pending.push_back(
+        {uint32_t(out->pending_members.size()), n, group[0].point->opinion.argmax});
+    out->pending_members.insert(out->pending_members.end(), group, group + n);
+    return;
+  }
   const KernelPoint& point = *group[0].point;
   const octomap::point3d& position = *group[0].position;
   switch (rule_.type()) {
@@ -199,7 +210,62 @@ void KernelPass::holdClasses(KernelRows* rows) {
   }
 }
 
+void KernelPass::flushOneHot(KernelRows* out) const {
+  if (out->pending.empty()) return;
+  constexpr size_t kVoxels = size_t(1) << (3 * kSubtreeLevels);
+  if (out->class_sums.empty()) {
+    out->class_sums.assign(kVoxels, 0.0);
+    out->class_lines.assign(kVoxels >> kSubtreeLevels, 0);
+  }
+  constexpr int kSize = 1 << kSubtreeLevels;
+  out->kept_lines.assign(kSize, ~uint64_t(0));
+  for (int z = 0; out->masked && z < kSize; ++z) {
+    uint64_t lines = 0;
+    for (int y = 0; y < kSize; ++y) lines |= uint64_t(out->mask[z << kSubtreeLevels | y] != 0) << y;
+    out->kept_lines[z] = lines;
+  }
+  // Rows made by one-hot groups alone need no second half (Dempster's running products): C wide.
+  if (out->touched.empty()) out->narrow = true;
+  // The groups in class order, each class's in scatter order (a counting sort).
+  std::vector<uint32_t> count(num_classes_ + 1, 0);
+  for (const KernelRows::PendingGroup& g : out->pending) ++count[g.cls + 1];
+  for (int c = 0; c < num_classes_; ++c) count[c + 1] += count[c];
+  out->pending_order.resize(out->pending.size());
+  for (uint32_t i = 0; i < out->pending.size(); ++i)
+    out->pending_order[count[out->pending[i].cls]++] = i;
+  for (size_t i = 0; i < out->pending_order.size(); ++i) {
+    const KernelRows::PendingGroup& g = out->pending[out->pending_order[i]];
+    scatterOneHot(&out->pending_members[g.first], g.n, out->pending_base, out);
+    const bool last_of_class = i + 1 == out->pending_order.size() ||
+                               out->pending[out->pending_order[i + 1]].cls != g.cls;
+    if (last_of_class) addClassSums(g.cls, out);
+  }
+  out->pending.clear();
+  out->pending_members.clear();
+}
+
+void KernelPass::addClassSums(int cls, KernelRows* out) const {
+  const size_t width = size_t(out->narrow ? 1 : DempsterContribution::kRowWidth) * num_classes_;
+  for (uint32_t line : out->lines_touched) {
+    for (uint64_t voxels = out->class_lines[line]; voxels; voxels &= voxels - 1) {
+      const uint32_t local = line << kSubtreeLevels | uint32_t(__builtin_ctzll(voxels));
+      uint32_t& row = out->index[local];
+      if (row == KernelRows::kNone) {
+        row = static_cast<uint32_t>(out->touched.size());
+        out->touched.push_back(local);
+        out->rows.resize(out->rows.size() + width, 0.0);
+      }
+      out->rows[size_t(row) * width + cls] += out->class_sums[local];  // the log-evidence part
+      out->class_sums[local] = 0.0;
+    }
+    out->class_lines[line] = 0;
+  }
+  out->lines_touched.clear();
+}
+
 void KernelPass::clearClasses(KernelRows* rows) {
+  if (!rows->pending.empty())
+    throw std::logic_error("KernelPass::clearClasses: flushOneHot first");
   constexpr int kSize = 1 << kSubtreeLevels;
   for (uint32_t local : rows->classes_touched) {
     rows->classes[local] = 0;
@@ -214,6 +280,7 @@ void KernelPass::clearClasses(KernelRows* rows) {
 template <class Contribution>
 void finishRowsWith(int num_classes, KernelRows* out) {
   if constexpr (Contribution::kRowWidth > 1) {
+    if (out->narrow) return;  // already the C increments
     const size_t width = size_t(Contribution::kRowWidth) * num_classes;
     const size_t rows = out->touched.size();
     for (size_t r = 0; r < rows; ++r) {
@@ -227,6 +294,7 @@ void finishRowsWith(int num_classes, KernelRows* out) {
 }
 
 void KernelPass::finishRows(KernelRows* out) const {
+  flushOneHot(out);
   switch (rule_.type()) {
     case FusionRuleType::kDempster:
       return finishRowsWith<DempsterContribution>(num_classes_, out);
@@ -332,6 +400,7 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
         if (k <= 0.0) continue;
         uint32_t& row = out->index[local];
         if (row == KernelRows::kNone) {
+          if (out->touched.empty()) out->narrow = false;  // the subtree's first row
           row = static_cast<uint32_t>(out->touched.size());
           out->touched.push_back(local);
           out->rows.resize(out->rows.size() + width, 0.0);
@@ -397,17 +466,23 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
   const OneHotTable& full = one_hot_[group[0].point->table];
   const OneHotTable& weaker_table =
       tables_per_value_ == 2 ? one_hot_[group[0].point->table + 1] : full;
+  const OneHotTable::Step* full_steps = full.steps();
+  const OneHotTable::Step* weaker_steps = weaker_table.steps();
   const uint64_t own_class =
       other_class_weight_ < 1.0 && !out->classes_touched.empty() ? classBit(cls) : 0;
-  const size_t width = size_t(DempsterContribution::kRowWidth) * num_classes_;
   const int x0 = int(ref[0]) - int(base[0]), y0 = int(ref[1]) - int(base[1]),
             z0 = int(ref[2]) - int(base[2]);
   const int reach_x = hi[0] - lo[0] + 1;
   const uint64_t reachable = (reach_x >= 64 ? ~uint64_t(0) : (uint64_t(1) << reach_x) - 1)
                              << (x0 + lo[0]);
   int on_line[kMaxGroup];  // the members within the support on the line at hand
+  const int reach_y = hi[1] - lo[1] + 1;
+  const uint64_t reachable_y = (reach_y >= 64 ? ~uint64_t(0) : (uint64_t(1) << reach_y) - 1)
+                               << (y0 + lo[1]);
   for (int oz = lo[2]; oz <= hi[2]; ++oz) {
-    for (int oy = lo[1]; oy <= hi[1]; ++oy) {
+    // Only the lines with a kept voxel: a surface's few of the group's box.
+    for (uint64_t lines = out->kept_lines[z0 + oz] & reachable_y; lines; lines &= lines - 1) {
+      const int oy = __builtin_ctzll(lines) - y0;
       const uint32_t line = uint32_t((z0 + oz) << kSubtreeLevels | (y0 + oy));
       const uint64_t kept = (out->masked ? out->mask[line] : ~uint64_t(0)) & reachable;
       if (!kept) continue;
@@ -422,32 +497,29 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
       }
       if (!members) continue;
       const uint64_t weaker_line = own_class ? out->weaker_lines[line] : 0;
-      uint64_t voxels = kept;
-      while (voxels) {
-        const int ox = __builtin_ctzll(voxels) - x0;
-        voxels &= voxels - 1;
-        const OneHotTable* table = &full;
-        if ((weaker_line >> (x0 + ox) & 1) &&
-            (out->classes_weaker[paddedIndex(x0 + ox, y0 + oy, z0 + oz)] & own_class)) {
+      double* class_sums = &out->class_sums[size_t(line) << kSubtreeLevels];
+      uint64_t summed = 0;  // the voxels this group adds to
+      for (uint64_t voxels = kept; voxels; voxels &= voxels - 1) {
+        const int x = __builtin_ctzll(voxels);
+        const OneHotTable::Step* steps = full_steps;
+        if ((weaker_line >> x & 1) &&
+            (out->classes_weaker[paddedIndex(x, y0 + oy, z0 + oz)] & own_class)) {
           if (other_class_weight_ <= 0.0) continue;
-          table = &weaker_table;
+          steps = weaker_steps;
         }
         // No branch per member: beyond its support (or reach: +inf) its table gives 0.
         double sum = 0.0;
         for (int m = 0; m < members; ++m) {
           const MemberTerms& t = terms[on_line[m]];
-          sum += (*table)(t.axis[0][ox] + t.syz);
+          sum += OneHotTable::at(steps, t.axis[0][x - x0] + t.syz);
         }
-        if (!(sum > 0.0)) continue;
-        const uint32_t local = line << kSubtreeLevels | uint32_t(x0 + ox);
-        uint32_t& row = out->index[local];
-        if (row == KernelRows::kNone) {
-          row = static_cast<uint32_t>(out->touched.size());
-          out->touched.push_back(local);
-          out->rows.resize(out->rows.size() + width, 0.0);
-        }
-        out->rows[size_t(row) * width + cls] += sum;  // the row's log-evidence part
+        if (!(sum > 0.0)) continue;  // no row from this group, as from the full loop
+        summed |= uint64_t(1) << x;
+        class_sums[x] += sum;
       }
+      if (!summed) continue;
+      if (!out->class_lines[line]) out->lines_touched.push_back(line);
+      out->class_lines[line] |= summed;
     }
   }
 }

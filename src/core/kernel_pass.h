@@ -16,8 +16,11 @@
 // a given evidence e and class weight w, so it is tabulated over s as k is (OneHotTable: no
 // division and no product per voxel, within the same error bound per contribution), and the
 // points of one 2 x 2 x 2 block (a down-sampling cell: up to 6 points) with the same class and
-// evidence are scattered as a group: each voxel's row is looked up and updated once for the
-// group, with the sum of its members' increments. Private to the core.
+// evidence are scattered as a group, the sum of its members' increments per voxel. A subtree's
+// groups wait until its last scatter and then go class by class, each class's in scatter order,
+// into a dense sum per voxel, so a row is looked up and written once per class (not once per
+// group) and holds the same sums bit for bit; rows of one-hot groups alone are C wide from the
+// start (no running products to finish, half the memory to fill). Private to the core.
 #pragma once
 
 #include <algorithm>
@@ -61,18 +64,21 @@ class KernelTable {
 class OneHotTable {
  public:
   OneHotTable(double sigma0, float evidence, int num_classes, double weight);
-  float evidence() const { return evidence_; }
-  // Without a branch: s >= 1 (or +inf) reads the last step, 0 with slope 0.
-  double operator()(double s) const {
-    const double x = std::min(s, 1.0) * KernelTable::kSteps;
-    const int i = static_cast<int>(x);
-    return double(steps_[i].value) + (x - i) * double(steps_[i].slope);
-  }
-
- private:
   struct Step {
     float value, slope;  // at step i, and to step i + 1: 32 KB, in the L1 cache
   };
+  float evidence() const { return evidence_; }
+  double operator()(double s) const { return at(steps_.data(), s); }
+  // The steps, for a loop that picks one of two tables per voxel without an extra load.
+  const Step* steps() const { return steps_.data(); }
+  // Without a branch: s >= 1 (or +inf) reads the last step, 0 with slope 0.
+  static double at(const Step* steps, double s) {
+    const double x = std::min(s, 1.0) * KernelTable::kSteps;
+    const int i = static_cast<int>(x);
+    return double(steps[i].value) + (x - i) * double(steps[i].slope);
+  }
+
+ private:
   float evidence_;
   std::vector<Step> steps_;  // kSteps + 1: the last is 0, 0
 };
@@ -104,6 +110,7 @@ struct KernelRows {
   std::vector<uint32_t> index;     // local voxel -> row, kNone when untouched
   std::vector<uint32_t> touched;   // local voxels with a row, in row order
   std::vector<double> rows;        // while scattering: the contribution's row width, then C
+  bool narrow = false;             // C wide while scattering too (one-hot groups' rows alone)
   std::vector<double> axis_terms;  // per-axis d^2 terms of the point (or group) at hand
   // SemanticConfig::other_class_weight < 1: per voxel of the subtree and of a one-voxel shell
   // around it, one bit per class (c mod 64) of this scan's points in it (0 for a voxel no point
@@ -117,6 +124,23 @@ struct KernelRows {
   // Per line of the subtree (as `mask`), the voxels whose classes_weaker is not 0: the loop
   // reads one word a line instead of the large padded array at every voxel.
   std::vector<uint64_t> weaker_lines;
+  // One-hot groups wait for KernelPass::flushOneHot, which scatters them class by class: each
+  // class into a dense sum per local voxel (class_sums, 0 between classes; class_lines: per
+  // line, its voxels with a sum; lines_touched: those lines), so that a row is looked up and
+  // written once per class rather than once per group.
+  struct PendingGroup {
+    uint32_t first;  // in pending_members
+    int n;
+    int cls;
+  };
+  std::vector<KernelMember> pending_members;
+  std::vector<PendingGroup> pending;
+  octomap::OcTreeKey pending_base;
+  std::vector<double> class_sums;
+  std::vector<uint64_t> class_lines;
+  std::vector<uint32_t> lines_touched;
+  std::vector<uint32_t> pending_order;
+  std::vector<uint64_t> kept_lines;  // per z of the subtree, bit y: line (z, y) has a kept voxel
   static constexpr uint32_t kNone = 0xFFFFFFFFu;
 };
 
@@ -138,11 +162,16 @@ class KernelPass {
   }
   // Adds the contributions of the n (<= kMaxGroup) points of `group` (one point, or points of
   // which each is sameGroup as the first) to the voxels of the subtree whose first voxel is
-  // `base` (64^3 voxels, kSubtreeLevels) into `rows`.
+  // `base` (64^3 voxels, kSubtreeLevels) into `rows`; a one-hot group's at flushOneHot (the
+  // points and positions its members name must live until then).
   void scatter(const KernelMember* group, int n, const octomap::OcTreeKey& base,
                KernelRows* rows) const;
-  // After the last scatter into `rows`: C increments per row (KernelRows::rows), as the rule's
-  // add() takes them.
+  // After the last scatter of a subtree, before clearClasses: the one-hot groups' contributions,
+  // class by class, each class's in the groups' order, so each row gets the sums it got when
+  // they were scattered at once, in the same order (bit for bit; only a general point's running
+  // product folded into its log-evidence, at evidence near FLT_MAX, now precedes them).
+  void flushOneHot(KernelRows* rows) const;
+  // After flushOneHot: C increments per row (KernelRows::rows), as the rule's add() takes them.
   void finishRows(KernelRows* rows) const;
   // SemanticConfig::other_class_weight < 1: the classes of the points that lie in the subtree
   // at `base` (markClasses for each, then holdClasses, before its scatters), and their reset
@@ -160,9 +189,12 @@ class KernelPass {
   void scatterWith(const Contribution& contribute, const KernelPoint& point,
                    const octomap::point3d& position, const octomap::OcTreeKey& base,
                    KernelRows* rows) const;
-  // The loop for a group of one-hot points: the sum of their tabulated increments per voxel.
+  // The loop for a group of one-hot points: the sum of their tabulated increments per voxel,
+  // into KernelRows::class_sums.
   void scatterOneHot(const KernelMember* group, int n, const octomap::OcTreeKey& base,
                      KernelRows* rows) const;
+  // The class sums into the rows' entries of class `cls`, and their reset.
+  void addClassSums(int cls, KernelRows* rows) const;
   void buildOneHotTables(std::vector<KernelPoint>* points);
 
   const EvidentialOcTree& tree_;

@@ -219,6 +219,7 @@ SubtreeView ScanSubtrees::updates(size_t i, int thread, const EvidentialOcTreeNo
                                    (*kernel_points_)[point_subtrees_[p].second]));
     kernel_->scatter(group, n, base, &kernel);
   }
+  kernel_->flushOneHot(&kernel);
   if (class_aware) KernelPass::clearClasses(&kernel);
   t.most_row_values = std::max(t.most_row_values, kernel.rows.size());
   t.most_rows = std::max(t.most_rows, kernel.touched.size());
@@ -278,7 +279,10 @@ size_t ScanSubtrees::capacityBytes() const {
     const KernelRows& k = t.kernel;
     bytes += vectorBytes(k.mask) + vectorBytes(k.index) + vectorBytes(k.touched) +
              vectorBytes(k.rows) + vectorBytes(k.axis_terms) + vectorBytes(k.classes) +
-             vectorBytes(k.classes_touched) + vectorBytes(t.order) +
+             vectorBytes(k.classes_touched) + vectorBytes(k.pending_members) +
+             vectorBytes(k.pending) + vectorBytes(k.pending_order) + vectorBytes(k.class_sums) +
+             vectorBytes(k.class_lines) + vectorBytes(k.lines_touched) +
+             vectorBytes(k.kept_lines) + vectorBytes(t.order) +
              vectorBytes(t.order_buffer) + vectorBytes(t.updates);
   }
   return bytes;
