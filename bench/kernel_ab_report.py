@@ -51,6 +51,7 @@ def main():
     parser.add_argument("--command", required=True)
     parser.add_argument("--title",
                         default="The kernel's one-hot road: CPU against plain OctoMap before and after")
+    parser.add_argument("--note", default="", help="a paragraph on what the change is")
     args = parser.parse_args()
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                             text=True).stdout.strip() or "unknown"
@@ -62,6 +63,8 @@ def main():
           "ratios to plain of one run compare (plain's own cost moves with the load). Evidence "
           "is derived (one-hot of the predicted class x 20), 50 m, 2 threads, passive OpenMP "
           "waiting.\n")
+    if args.note:
+        print(f"{args.note}\n")
     for name, what, first, steady in SEQUENCES:
         print(f"## {what}\n")
         print("| build | method | CPU ratio, first | CPU ratio, steady | wall ratio, steady | "

@@ -8,7 +8,7 @@
 # CSV files and meta.txt (commits, load average, commands) into OUT, then the record
 # docs/experiments/RECORD.md (default kernel_one_hot, titled TITLE) with bench/kernel_ab_report.py.
 #
-#   scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT [RECORD [TITLE]]   # ~20 min at load 13
+#   scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT [RECORD [TITLE [NOTE]]]   # ~20 min at load 13
 # Outside CI; CLI (for generating the sequence): EVIDENTIAL_OCTOMAP_CLI or build/core's.
 set -euo pipefail
 
@@ -17,6 +17,7 @@ after="$(realpath "$2")"
 out="$(mkdir -p "$3" && cd "$3" && pwd)"
 record="${4:-kernel_one_hot}"
 title="${5:-}"
+note="${6:-}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cli="${EVIDENTIAL_OCTOMAP_CLI:-${root}/build/core/src/tools/evidential_octomap}"
 offroad="${out}/forest40"
@@ -73,5 +74,6 @@ done
 command="scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT"
 [[ $# -ge 4 ]] && command+=" ${record}"
 [[ -n "${title}" ]] && command+=" '${title}'"
+[[ -n "${note}" ]] && command+=" NOTE"
 python3 "${root}/bench/kernel_ab_report.py" "${out}" --command "${command}" \
-  ${title:+--title "${title}"} >"${root}/docs/experiments/${record}.md"
+  ${title:+--title "${title}"} ${note:+--note "${note}"} >"${root}/docs/experiments/${record}.md"
