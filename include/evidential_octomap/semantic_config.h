@@ -119,10 +119,10 @@ struct InsertSettings {
   // Fast free space for live mapping (not exact): each ray's cells are walked back from its end
   // and take a shortcut after two cells already cleared by this scan's other rays, so the many
   // rays that overlap near the sensor are cast once (voxblox's "fast" integrator rule). Past the
-  // shortcut a ray still clears every cell of an 8x8x8 block that holds an occupied voxel or
-  // semantics, so what a mover left is cleared as in the exact mode; only free space without
-  // semantics that only a shortcut ray crosses stays unobserved that scan
-  // (docs/experiments/benchmarks.md and docs/experiments/moving_objects.md measure it). An
+  // shortcut a ray still clears every voxel it crosses that is occupied or holds semantics, so
+  // what a mover left is cleared as in the exact mode; only free space without semantics that
+  // only a shortcut ray crosses stays unobserved that scan (docs/experiments/fast_free_space.md
+  // and docs/experiments/moving_objects.md measure it). An
   // insertion setting like threads: not stored in the map.
   bool fast_free_space = false;
   // Point evidence below this value counts as 0 (0: off). An evidential network's softplus or
