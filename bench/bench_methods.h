@@ -2,6 +2,7 @@
 // each with its own map and its measurements per step. Bench-only.
 #pragma once
 
+#include <evidential_octomap/class_table.h>
 #include <evidential_octomap/evidential_octree.h>
 #include <octomap/OcTree.h>
 #include <time.h>
@@ -44,7 +45,8 @@ struct Method {
   std::vector<std::vector<InsertStats>> stats;           // semantic only
 
   virtual ~Method() = default;
-  virtual void reset(double resolution, int num_classes) = 0;
+  // A new empty map; a semantic map takes the class table's classes (ground and movable flags).
+  virtual void reset(double resolution, const evidential_octomap::ClassTable& classes) = 0;
   virtual InsertStats insert(const Scan& scan, const std::vector<float>& evidence) = 0;
 
   void step(size_t i, const Scan& scan, const std::vector<float>& evidence) {
@@ -99,7 +101,7 @@ struct Method {
 struct PlainMethod : Method {
   bool discretize = false;
   std::unique_ptr<octomap::OcTree> tree;
-  void reset(double resolution, int) override {
+  void reset(double resolution, const evidential_octomap::ClassTable&) override {
     tree = std::make_unique<octomap::OcTree>(resolution);
   }
   InsertStats insert(const Scan& scan, const std::vector<float>&) override {
@@ -111,10 +113,11 @@ struct PlainMethod : Method {
 struct SemanticMethod : Method {
   SemanticConfig config;
   std::unique_ptr<EvidentialOcTree> tree;
-  void reset(double resolution, int num_classes) override {
+  void reset(double resolution, const evidential_octomap::ClassTable& classes) override {
     config.max_range = max_range;
     config.threads = threads;
-    tree = std::make_unique<EvidentialOcTree>(resolution, num_classes, config);
+    tree = std::make_unique<EvidentialOcTree>(resolution, classes.numClasses(), config);
+    tree->setClasses(classes);
   }
   InsertStats insert(const Scan& scan, const std::vector<float>& evidence) override {
     return tree->insertSemanticScan(scan.points_W, evidence, scan.origin_W);

@@ -140,8 +140,8 @@ RangeRun buildRun(double range, bool quick) {
 void runInterleaved(RangeRun* run, const std::vector<Scan>& scans, const std::vector<int>& order,
                     const std::vector<std::vector<float>>& evidence,
                     const std::vector<std::vector<float>>& learned, double resolution,
-                    int num_classes, int repeat) {
-  for (auto& m : run->methods) m->reset(resolution, num_classes);
+                    const evidential_octomap::ClassTable& classes, int repeat) {
+  for (auto& m : run->methods) m->reset(resolution, classes);
   const size_t count = run->methods.size();
   for (size_t i = 0; i < order.size(); ++i) {
     const size_t scan = size_t(order[i]);
@@ -239,7 +239,7 @@ int rssChild(const Options& o) {
   std::unique_ptr<Method> m =
       o.rss_child == "plain" ? plainMethod(o.rss_range, true)
                              : semanticMethod(o.rss_range, 2, o.rss_child == "fast", "dempster");
-  m->reset(o.resolution, num_classes);
+  m->reset(o.resolution, evidential_octomap::ClassTable::load(o.classes));
   for (const auto& scan : scans) {
     // The evidence of one scan at a time, as a node receives it with its cloud.
     m->insert(scan, o.rss_child == "plain" ? std::vector<float>()
@@ -552,12 +552,13 @@ int main(int argc, char** argv) try {
   std::cerr << "loaded " << scans.size() << " scans, C = " << num_classes << ", resolution "
             << o.resolution << " m\n";
 
+  const auto classes = evidential_octomap::ClassTable::load(o.classes);
   Report report;
   std::vector<RangeRun> runs;
   for (double range : o.ranges) {
     runs.push_back(buildRun(range, o.quick));
     for (int rep = 0; rep < o.repeats; ++rep)
-      runInterleaved(&runs.back(), scans, order, evidence, learned, o.resolution, num_classes, rep);
+      runInterleaved(&runs.back(), scans, order, evidence, learned, o.resolution, classes, rep);
   }
   insertTable(runs, phases, &report);
   phaseTable(runs, &report);

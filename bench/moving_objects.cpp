@@ -1,11 +1,12 @@
 // Moving objects on a generated sequence (SYNTHETIC, `evidential_octomap generate`): maps it once
-// per clearing_observations value and reports, per mover, the share of its swept volume that
+// per movable_clearing_observations value (the class table's movable classes, the library
+// defaults otherwise) and reports, per mover, the share of its swept volume that
 // still answers its class `lag` scans after it left (of the swept voxels that are free and were
 // cleared since it left), and at the end a DynamicMap_Benchmark-style
 // static / dynamic accuracy over every point of the sequence:
 //   static accuracy  = share of static points whose voxel is occupied and answers their class;
 //   dynamic accuracy = share of mover points whose voxel no longer answers the mover's class.
-// Usage: moving_objects <dataset> <K,K,...> [lag=10]   (prints one JSON line per K)
+// Usage: moving_objects <dataset> <M,M,...> [lag=10]   (prints one JSON line per M)
 #include <cmath>
 #include <fstream>
 #include <iostream>
@@ -16,6 +17,7 @@
 #include <tuple>
 #include <vector>
 
+#include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/evidential_octree.h"
 
@@ -94,11 +96,12 @@ struct Point {
   int mover;  // instance, 0 static
 };
 
-void run(const Dataset& data, int classes, std::map<int, Mover>& movers, int k, int lag,
-         std::vector<Point>* points, bool collect) {
+void run(const Dataset& data, const evidential_octomap::ClassTable& classes,
+         std::map<int, Mover>& movers, int k, int lag, std::vector<Point>* points, bool collect) {
   SemanticConfig config;
-  config.clearing_observations = k;
-  EvidentialOcTree tree(0.2, classes, config);
+  config.movable_clearing_observations = k;
+  EvidentialOcTree tree(0.2, classes.numClasses(), config);
+  tree.setClasses(classes);
   std::ostringstream ghosts;
   double freed_total = 0, ghost_total = 0;
   for (size_t i = 0; i < data.size(); ++i) {
@@ -152,7 +155,7 @@ void run(const Dataset& data, int classes, std::map<int, Mover>& movers, int k, 
       dy_ok += label != majorityClass(movers[p.mover]);
     }
   }
-  std::cout << "{\"clearing_observations\":" << k << ",\"lag\":" << lag
+  std::cout << "{\"movable_clearing_observations\":" << k << ",\"lag\":" << lag
             << ",\"ghost_share\":" << (freed_total ? ghost_total / freed_total : 0)
             << ",\"freed_voxels\":" << freed_total << ",\"static_accuracy\":" << double(st_ok) / st
             << ",\"dynamic_accuracy\":" << (dy ? double(dy_ok) / dy : 0) << ",\"movers\":["
@@ -163,7 +166,7 @@ void run(const Dataset& data, int classes, std::map<int, Mover>& movers, int k, 
 
 int main(int argc, char** argv) {
   if (argc < 3) {
-    std::cerr << "usage: moving_objects <dataset> <K,K,...> [lag=10]\n";
+    std::cerr << "usage: moving_objects <dataset> <M,M,...> [lag=10]\n";
     return 2;
   }
   const std::string dir = argv[1];
@@ -175,7 +178,7 @@ int main(int argc, char** argv) {
   std::stringstream ks(argv[2]);
   bool first = true;
   for (std::string k; std::getline(ks, k, ',');) {
-    run(data, table.numClasses(), movers, std::stoi(k), lag, &points, first);
+    run(data, table, movers, std::stoi(k), lag, &points, first);
     first = false;
   }
   return 0;

@@ -7,6 +7,8 @@
 //                the mover's class;
 //   occupied_share / plain_occupied_share: share of them occupied in this map / in plain's;
 //   own_ghost_share the same from the voxel's own evidence only (EvidentialOcTree::query);
+//   free_ghost_share share of the freed voxels that plain OctoMap holds free and whose answer
+//                is the mover's class (a voxel still occupied keeps its class by design);
 //   road_share   share of the road surface under its path (road-layer voxels inside its
 //                footprint at some scan that plain OctoMap holds occupied) that answer `road`;
 //   road_taken_share share of the road-layer voxels under its path that plain OctoMap knows
@@ -123,7 +125,7 @@ std::vector<Key> addBox(const ms::Mover& m, int scan, const EvidentialOcTree& tr
 }
 
 struct Shares {
-  size_t freed = 0, ghosts = 0, own_ghosts = 0, occupied = 0, plain_occupied = 0;
+  size_t freed = 0, ghosts = 0, own_ghosts = 0, free_ghosts = 0, occupied = 0, plain_occupied = 0;
   size_t road = 0, road_kept = 0, road_known = 0, road_taken = 0;
 };
 
@@ -139,7 +141,9 @@ Shares measure(const EvidentialOcTree& tree, const octomap::OcTree& plain, const
     s.plain_occupied += plain.isNodeOccupied(p);
     const auto* node = tree.search(k);
     s.occupied += node && tree.isNodeOccupied(node);
-    s.ghosts += tree.answer(k).label == label;
+    const bool ghost = tree.answer(k).label == label;
+    s.ghosts += ghost;
+    s.free_ghosts += ghost && !plain.isNodeOccupied(p);
     s.own_ghosts += tree.query(k).label == label;
   }
   for (const auto& [x, y, z] : f.road) {
@@ -163,6 +167,7 @@ void print(const ms::Case& c, const std::string& row, const ms::Mover& m, int la
             << m.name << "\",\"class\":\"" << ms::className(m.label) << "\",\"lag\":" << lag
             << ",\"freed\":" << s.freed << ",\"ghost_share\":" << share(s.ghosts, s.freed)
             << ",\"own_ghost_share\":" << share(s.own_ghosts, s.freed)
+            << ",\"free_ghost_share\":" << share(s.free_ghosts, s.freed)
             << ",\"occupied_share\":" << share(s.occupied, s.freed)
             << ",\"plain_occupied_share\":" << share(s.plain_occupied, s.freed)
             << ",\"road\":" << s.road << ",\"road_share\":" << share(s.road_kept, s.road)
@@ -171,13 +176,15 @@ void print(const ms::Case& c, const std::string& row, const ms::Mover& m, int la
 
 // Every row's map and plain OctoMap's, fed the same scans in turn.
 void runCase(const ms::Case& c, const std::vector<Row>& rows, int lag) {
-  std::vector<bool> ground(ms::kClasses, false);
+  std::vector<bool> ground(ms::kClasses, false), movable(ms::kClasses, false);
   ground[ms::kRoad] = true;
+  movable[ms::kPerson] = movable[ms::kCar] = true;  // as the shipped class tables mark them
   std::vector<EvidentialOcTree> trees;
   trees.reserve(rows.size());
   for (const Row& row : rows) {
     trees.emplace_back(kResolution, ms::kClasses, row.config);
     trees.back().setGroundClasses(ground);
+    trees.back().setMovableClasses(movable);
   }
   std::vector<double> cpu_ms(rows.size(), 0.0);
   octomap::OcTree plain(kResolution);

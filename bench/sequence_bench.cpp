@@ -9,6 +9,7 @@
 //   evidential_sequence_bench ... --only exact   # one method alone: its RSS after every step
 //   evidential_sequence_bench ... --methods plain,exact,occupied_only
 //   evidential_sequence_bench ... --methods plain,live,live_full_rays
+//   evidential_sequence_bench ... --methods plain,exact,exact_no_clearing,live,live_no_clearing
 //   evidential_sequence_bench ... --only local --radius 60 --tile-dir out/tiles --save out/g.ot
 //     (local: the exact insert in a LocalMap; --save writes the method's whole map at the end,
 //      for exact the map, for local the global map merged from the tiles, both fully pruned)
@@ -106,13 +107,21 @@ std::unique_ptr<evbench::Method> liveFullRaysMethod(double range) {
   return m;
 }
 
+// A method without the default clearing of movable classes (movable_clearing_observations 0).
+std::unique_ptr<evbench::Method> withoutClearing(std::unique_ptr<evbench::Method> m) {
+  m->key += "_no_clearing";
+  m->label += ", movable_clearing_observations 0";
+  static_cast<evbench::SemanticMethod&>(*m).config.movable_clearing_observations = 0;
+  return m;
+}
+
 // The exact insert in a map that keeps only the region around the sensor in memory.
 struct LocalMethod : evbench::SemanticMethod {
   std::string tile_dir;
   double radius = 0.0;
   std::unique_ptr<evidential_octomap::LocalMap> local;
-  void reset(double resolution, int num_classes) override {
-    SemanticMethod::reset(resolution, num_classes);
+  void reset(double resolution, const evidential_octomap::ClassTable& classes) override {
+    SemanticMethod::reset(resolution, classes);
     const double r = radius > 0.0 ? radius : evidential_octomap::LocalMap::reach(*tree);
     local = std::make_unique<evidential_octomap::LocalMap>(tree.get(), tile_dir, r);
   }
@@ -160,6 +169,10 @@ std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
       out.push_back(evbench::semanticMethod(o.range, 2, false, "dempster"));
     else if (key == "live")
       out.push_back(evbench::liveMethod(o.range, false));
+    else if (key == "exact_no_clearing")
+      out.push_back(withoutClearing(evbench::semanticMethod(o.range, 2, false, "dempster")));
+    else if (key == "live_no_clearing")
+      out.push_back(withoutClearing(evbench::liveMethod(o.range, false)));
     else if (key == "occupied_only")
       out.push_back(occupiedOnlyMethod(o.range));
     else if (key == "live_volume")
@@ -208,7 +221,8 @@ int main(int argc, char** argv) try {
   const ScanSource source(o);
   auto methods = methodsOf(o);  // --only: the one method alone, for its RSS
   const int C = source.numClasses();
-  for (auto& m : methods) m->reset(o.resolution, C);
+  const auto classes = evidential_octomap::ClassTable::load(o.classes);
+  for (auto& m : methods) m->reset(o.resolution, classes);
   std::ofstream csv(o.csv);
   if (!csv) throw std::runtime_error("cannot write " + o.csv);
   csv << "step,scan,method,cpu_ms,wall_ms,cpu_ms_rays,cpu_ms_kernel,cpu_ms_update,rss_mb,"

@@ -73,6 +73,7 @@ TEST(ClassTable, SmallFixtureIsReadExactly) {
   EXPECT_EQ(table.colors[1], (ClassTable::Rgb{0, 255, 0}));
   EXPECT_EQ(table.ignore_class, 2);
   EXPECT_EQ(table.ground, (std::vector<bool>{true, false, false})) << "left out means false";
+  EXPECT_EQ(table.movable, (std::vector<bool>{false, true, false}));
   EXPECT_EQ(table.learning_map.size(), 3u);
   EXPECT_EQ(table.classOfRaw(0), 2);
   EXPECT_EQ(table.classOfRaw(7), 0);
@@ -113,6 +114,26 @@ TEST(ClassTable, ShippedTablesMarkTheirGroundSurfaces) {
   }
   EXPECT_EQ(ground, (std::vector<std::string>{"road", "parking", "sidewalk", "other-ground",
                                               "terrain"}));
+}
+
+TEST(ClassTable, ShippedTablesMarkPeopleAndVehiclesMovable) {
+  const ClassTable kitti = ClassTable::load(kSourceDir + "/config/classes_semantickitti.yaml");
+  std::vector<std::string> movable;
+  for (int c = 0; c < kitti.numClasses(); ++c) {
+    if (kitti.movable[c]) movable.push_back(kitti.names[c]);
+  }
+  EXPECT_EQ(movable, (std::vector<std::string>{"car", "bicycle", "motorcycle", "truck",
+                                               "other-vehicle", "person", "bicyclist",
+                                               "motorcyclist"}));
+  for (const char* family : {"rellis3d", "offroad_farm", "offroad_forest", "offroad_grassland",
+                             "offroad_rocky"}) {
+    const ClassTable table =
+        ClassTable::load(kSourceDir + "/config/classes_" + std::string(family) + ".yaml");
+    for (int c = 0; c < table.numClasses(); ++c) {
+      const bool mover = table.names[c] == "person" || table.names[c] == "vehicle";
+      EXPECT_EQ(table.movable[c], mover) << family << " " << table.names[c];
+    }
+  }
 }
 
 TEST(ClassTable, MissingFileThrowsNamingThePath) {

@@ -1,4 +1,5 @@
-// Moving objects leave no ghosts (SemanticConfig::clearing_observations, off by default), with
+// Moving objects leave no ghosts (SemanticConfig::clearing_observations, off by default, and
+// movable_clearing_observations for the classes a class table marks movable, on), with
 // the library defaults and the live profile (config/mapping_live.yaml) otherwise: a SYNTHETIC
 // street, a 0.6 x 0.6 x 1.8 m person walking 7.5 m across the view of a 32-beam LiDAR 8 m away
 // (50 scans), then the empty street; fast free space still clearing what a mover left; the
@@ -152,11 +153,13 @@ double roadShare(const EvidentialOcTree& tree, const PersonRun& run, size_t* cou
   return road ? double(kept) / double(road) : 0.0;
 }
 
-// One thread, the ground a ground class (as a class table marks it).
-EvidentialOcTree streetMap(SemanticConfig config) {
+// One thread, the ground a ground class (as a class table marks it); `movable`: the person a
+// movable class too.
+EvidentialOcTree streetMap(SemanticConfig config, bool movable = false) {
   config.threads = 1;
   EvidentialOcTree tree(0.2, kClasses, config);
   tree.setGroundClasses({true, false, false, false});
+  if (movable) tree.setMovableClasses({false, true, false, false});
   return tree;
 }
 EvidentialOcTree streetMap(int clearing_observations) {
@@ -213,6 +216,31 @@ TEST(MovingObjects, LiveProfileLeavesFewGhostsAndKeepsTheRoad) {
   walkThenEmpty(&tree, &run, 10);
   const GhostShare after10 = ghostShare(tree, run);
   EXPECT_GT(after10.freed, run.swept.size() / 2);  // fast free space freed most of it too
+  EXPECT_LE(after10.ghosts, 0.02);
+  size_t road = 0;
+  EXPECT_GE(roadShare(tree, run, &road), 0.95);
+  EXPECT_GT(road, 20u);
+}
+
+// The defaults clear the classes a class table marks movable after one clearing.
+TEST(MovingObjects, DefaultsLeaveFewGhostsOfAMovableClass) {
+  EvidentialOcTree tree = streetMap(SemanticConfig(), true);
+  PersonRun run;
+  walkThenEmpty(&tree, &run, 10);
+  const GhostShare after10 = ghostShare(tree, run);
+  EXPECT_GT(after10.freed, run.swept.size() / 2);
+  EXPECT_LE(after10.ghosts, 0.02);
+  size_t road = 0;
+  EXPECT_GE(roadShare(tree, run, &road), 0.95);
+  EXPECT_GT(road, 20u);
+}
+
+TEST(MovingObjects, LiveProfileLeavesFewGhostsOfAMovableClass) {
+  EvidentialOcTree tree = streetMap(liveProfile(), true);
+  PersonRun run;
+  walkThenEmpty(&tree, &run, 10);
+  const GhostShare after10 = ghostShare(tree, run);
+  EXPECT_GT(after10.freed, run.swept.size() / 2);
   EXPECT_LE(after10.ghosts, 0.02);
   size_t road = 0;
   EXPECT_GE(roadShare(tree, run, &road), 0.95);
@@ -348,7 +376,7 @@ TEST(ClearingDiscount, KeepsTheClassSharesAndRaisesUncertainty) {
   const float u_before = tree.query(key).uncertainty;
   clear(&tree, key, 1);
   const std::vector<float> after = tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
-  const double keep = tree.config().clearingKeep();
+  const double keep = SemanticConfig::clearingKeep(kClearings);
   for (int c = 0; c < kClasses; ++c) EXPECT_NEAR(after[c], before[c] * keep, 1e-6);
   EXPECT_EQ(tree.query(key).label, 2);
   EXPECT_GT(tree.query(key).uncertainty, u_before);
@@ -365,7 +393,7 @@ TEST(ClearingDiscount, ClassesTheScanStillShowsKeepTheirEvidence) {
   const std::vector<double> row{0.0, 0.0, 0.4, 0.05};  // shows class 2; class 3 too little
   detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, -1, 0}}, row, false);
   const std::vector<float> after = tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
-  const double keep = tree.config().clearingKeep();
+  const double keep = SemanticConfig::clearingKeep(kClearings);
   ASSERT_LT(keep, 0.5);
   EXPECT_NEAR(after[0], 1.0 * keep, 1e-6);
   EXPECT_NEAR(after[1], 0.5 * keep, 1e-6);
@@ -420,6 +448,81 @@ TEST(ClearingDiscount, SurfaceMapClearedVoxelAnswersNoClassNotItsNeighbours) {
   EXPECT_EQ(tree.answer(cleared).label, -1);
 }
 
+// A movable class's evidence goes after movable_clearing_observations clearings (1 by default);
+// a static class in the same voxel keeps what it had while clearing_observations is off.
+TEST(ClearingDiscount, MovableClassGoesStaticClassStays) {
+  EvidentialOcTree tree = streetMap(SemanticConfig());
+  const octomap::OcTreeKey key(32768, 32768, 32768);
+  std::vector<double> held(kClasses, 0.0);
+  held[kPerson] = 3.0;
+  held[kWall] = 0.5;
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, -1, 0}}, held, false);
+  ASSERT_EQ(tree.query(key).label, kPerson);
+  tree.setMovableClasses({false, true, false, false});
+  clear(&tree, key, 1);
+  const std::vector<float> after = tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
+  EXPECT_LT(after[kPerson], float(SemanticConfig::kReleasedEvidence));
+  EXPECT_NEAR(after[kWall], 0.5, 1e-6);
+  EXPECT_EQ(tree.query(key).label, kWall);
+}
+
+// The mover's own points spread its class into the voxels it has just left: in a voxel seen
+// empty that evidence neither protects what the voxel held nor is added, while a static class's
+// is (contextual discounting as before).
+TEST(ClearingDiscount, AVoxelSeenEmptyTakesNoEvidenceOfAMovableClass) {
+  SemanticConfig config;
+  config.clearing_observations = kClearings;
+  EvidentialOcTree tree = streetMap(config);
+  const octomap::OcTreeKey key(32768, 32768, 32768);
+  std::vector<double> held(kClasses, 0.0);
+  held[kPerson] = 3.0;
+  held[kWall] = 0.5;
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, -1, 0}}, held, false);
+  tree.setMovableClasses({false, true, false, false});
+  std::vector<double> row(kClasses, 0.0);
+  row[kPerson] = 2.0;  // the person beside the voxel shows its class strongly
+  row[kWall] = 1.0;
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, -1, 0}}, row, false);
+  const std::vector<float> after = tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
+  EXPECT_LT(after[kPerson], float(SemanticConfig::kReleasedEvidence));
+  EXPECT_NEAR(after[kWall], 0.5 + 1.0, 1e-6);
+  EXPECT_EQ(tree.query(key).label, kWall);
+  // Hit, the voxel is a surface again and takes the person's evidence.
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, +1, 0}}, row, false);
+  EXPECT_GT(tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false))[kPerson], 1.0f);
+}
+
+TEST(ClearingDiscount, WithoutMovableClassesTheDefaultsClearNothing) {
+  EvidentialOcTree tree = streetMap(SemanticConfig());
+  const octomap::OcTreeKey key(32768, 32768, 32768);
+  std::vector<double> held(kClasses, 0.0);
+  held[kPerson] = 3.0;
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, -1, 0}}, held, false);
+  clear(&tree, key, 5);
+  EXPECT_EQ(tree.query(key).label, kPerson);
+}
+
+TEST(ClearingDiscount, TheFewerClearingsApply) {
+  SemanticConfig config;
+  config.clearing_observations = 3;
+  config.movable_clearing_observations = 1;
+  EXPECT_EQ(config.clearingsOf(true), 1);
+  EXPECT_EQ(config.clearingsOf(false), 3);
+  config.movable_clearing_observations = 5;
+  EXPECT_EQ(config.clearingsOf(true), 3);
+  config.movable_clearing_observations = 0;
+  EXPECT_EQ(config.clearingsOf(true), 3);
+  config.clearing_observations = 0;
+  EXPECT_EQ(config.clearingsOf(true), 0);
+  EXPECT_EQ(SemanticConfig::clearingKeep(0), 1.0);
+}
+
+TEST(ClearingDiscount, MovableFlagsMustCoverEveryClass) {
+  EvidentialOcTree tree = streetMap(SemanticConfig());
+  EXPECT_THROW(tree.setMovableClasses({true, false}), std::invalid_argument);
+  EXPECT_NO_THROW(tree.setMovableClasses({}));
+}
+
 TEST(ClearingDiscount, OffLeavesPayloadsUntouched) {
   EvidentialOcTree tree = streetMap(0);
   const octomap::OcTreeKey key(32768, 32768, 32768);
@@ -437,6 +540,8 @@ TEST(ClearingDiscount, RefusesCountsOutsideItsRange) {
   EXPECT_NE(config.problem(), "");
   config.clearing_observations = 10;
   EXPECT_EQ(config.problem(), "");
+  config.movable_clearing_observations = -1;
+  EXPECT_NE(config.problem().find("movable_clearing_observations"), std::string::npos);
 }
 
 }  // namespace

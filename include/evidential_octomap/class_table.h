@@ -19,6 +19,9 @@ struct ClassTable {
   // C flags: the class is a ground surface (`ground: true`; road, trail, grass): its points'
   // kernel support is flatter (SemanticConfig::ground_vertical_support).
   std::vector<bool> ground;
+  // C flags: the class moves (`movable: true`; people, vehicles): a voxel that rays find empty
+  // again forgets it (SemanticConfig::movable_clearing_observations).
+  std::vector<bool> movable;
   int ignore_class = -1;             // class excluded from evaluation queries (-1: none)
   std::unordered_map<uint32_t, int> learning_map;  // raw label id -> class id
 

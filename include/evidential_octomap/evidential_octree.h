@@ -25,6 +25,7 @@
 
 namespace evidential_octomap {
 
+struct ClassTable;
 class EvidentialOcTree;
 class PayloadStore;
 class ScanIntegrator;
@@ -123,6 +124,14 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   bool isGroundClass(int c) const {
     return c >= 0 && size_t(c) < ground_classes_.size() && ground_classes_[c];
   }
+  // Which classes move (ClassTable::movable: people, vehicles): a voxel that rays find empty
+  // again forgets them after SemanticConfig::movable_clearing_observations clearings. Size C, or
+  // empty (none, the default). An insertion property like the config's insertion settings: not
+  // stored in the .ot file.
+  void setMovableClasses(const std::vector<bool>& movable);
+  const std::vector<bool>& movableClasses() const { return movable_classes_; }
+  // A class table's names, ground and movable flags at once (its C must be this map's).
+  void setClasses(const ClassTable& classes);
   const SemanticConfig& config() const { return config_; }
   // Throws std::invalid_argument for values SemanticConfig::problem() refuses. Changing the rule
   // re-interprets stored payloads, so it is refused (std::logic_error) while the map holds any.
@@ -282,11 +291,21 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // leaf's payload += from - prior (addPayload), stored.
   void addToLeaf(EvidentialOcTreeNode* leaf, const float* from, Edit& edit);
   void releaseLeafPayload(EvidentialOcTreeNode* leaf, Edit& edit);
-  // A clearing observation of a leaf: its payload discounted, released below kReleasedEvidence
-  // (SemanticConfig::clearing_observations; clearing_discount.cpp); `increments`: this scan's
-  // kernel row for the leaf (C values), or nullptr.
-  void discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments, Edit& edit);
-  bool discountsClearings() const { return config_.clearing_observations > 0; }
+  // How a clearing observation treats each class (clearing_discount.cpp): the factor it keeps
+  // of the class's evidence, and whether the class is movable with its clearings on (then this
+  // scan's kernel row does not protect it, nor adds to it). Empty when no class is ever cleared.
+  struct ClearingRule {
+    std::vector<double> keep;
+    std::vector<char> movable;
+  };
+  ClearingRule clearingRule() const;
+  // A clearing observation of a leaf: its payload discounted by the rule, released below
+  // kReleasedEvidence (SemanticConfig::clearing_observations); `increments`: this scan's kernel
+  // row for the leaf (C values), or nullptr.
+  void discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments,
+                           const ClearingRule& rule, Edit& edit);
+  bool discountsClearings() const { return discounts_clearings_; }
+  void updateDiscountsClearings();
   void expandLeaf(EvidentialOcTreeNode* node, Edit& edit);
   bool pruneChildren(EvidentialOcTreeNode* node, Edit& edit);  // when isNodeCollapsible
   void collapseChildren(EvidentialOcTreeNode* node, Edit& edit);
@@ -338,6 +357,8 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   int num_classes_ = 1;
   std::vector<std::string> class_names_;
   std::vector<bool> ground_classes_;  // empty: no ground class
+  std::vector<bool> movable_classes_;  // empty: no movable class
+  bool discounts_clearings_ = false;   // some class's clearings are on (clearingRule())
   SemanticConfig config_;
   std::shared_ptr<const ErrorModel> error_model_;
   std::unique_ptr<FusionRule> rule_;

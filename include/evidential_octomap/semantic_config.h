@@ -148,6 +148,10 @@ struct InsertSettings {
   // cannot apply one chunk's clearings to another chunk's evidence, so batch mapping equals
   // sequential mapping with this setting at 0.
   int clearing_observations = 0;
+  // The same for the classes a class table marks movable (ClassTable::movable, set on the tree
+  // by setMovableClasses: people, vehicles), the classes that leave ghosts; it applies where it
+  // is smaller than clearing_observations or that is off. 0: off.
+  int movable_clearing_observations = 1;
   // Thin objects keep their class: in a voxel that this scan's points show to hold other
   // classes but not the point's own, a point's kernel weight is scaled by this (1: classes
   // ignored; 0: the support stops there). A voxel holds a class when two of its points have it,
@@ -164,8 +168,11 @@ struct InsertSettings {
   static constexpr double kReleasedEvidence = 0.01;
   // The factor each clearing keeps: (kReleasedEvidence / 2 / kMaxStoredLogEvidence)^(1 / K), so
   // that K clearings bring even the largest dempster payload below kReleasedEvidence (to half of
-  // it, a margin for float rounding); 1 when off.
-  double clearingKeep() const;
+  // it, a margin for float rounding); 1 when off (K = 0).
+  static double clearingKeep(int clearings);
+  // The clearings after which a class's evidence is gone (0: never): clearing_observations, or
+  // movable_clearing_observations for a movable class where that comes first.
+  int clearingsOf(bool movable) const;
 
   // Threads for the semantic pass (0 = OpenMP default).
   int threads = 0;

@@ -18,7 +18,7 @@ steps work voxel by voxel, so they split into tiles (tiles.py): no task ever hol
 chunk's map or three tiles. Occupancy log-odds are summed unclamped and clamped once per tile at
 the end, so the result does not depend on the chunking or the number of workers; it equals the
 sequential map clamped once at the end (OctoMap clamps after every scan, which no merge can
-reproduce).
+reproduce), both with clearing off (MappingJob.semantic_config).
 """
 from __future__ import annotations
 
@@ -38,6 +38,7 @@ from ._core import write_tiled_map_manifest
 from . import tiles
 
 FLT_MAX = 3.4028234663852886e38  # largest float: "unbounded" log-odds that still save as .ot
+CLEARINGS = ("clearing_observations", "movable_clearing_observations")
 
 
 @dataclass(frozen=True)
@@ -55,7 +56,13 @@ class MappingJob:
     unclamped: bool = False
 
     def semantic_config(self) -> SemanticConfig:
-        return SemanticConfig(**self.config)
+        """The job's settings; clearing is off (a chunk's clearings cannot reach the evidence
+        that another chunk holds, so no merge could equal the sequential map with it)."""
+        for name in CLEARINGS:
+            if self.config.get(name, 0):
+                raise ValueError(f"batch mapping cannot apply {name}: a chunk's clearings "
+                                 "cannot reach another chunk's evidence; map sequentially")
+        return SemanticConfig(**{**{name: 0 for name in CLEARINGS}, **self.config})
 
 
 @dataclass
@@ -118,6 +125,7 @@ def fuse_in_order(tree: EvidentialOcTree, unobserved: EvidentialOcTree,
     """tree and unobserved become the map and the unplaced evidence of both (in place)."""
     rest = EvidentialOcTree(tree.resolution, tree.class_names, tree.config)
     rest.ground_classes = tree.ground_classes
+    rest.movable_classes = tree.movable_classes
     tree.add_evidence(later_unobserved, rest)  # before the later chunk's observations
     set_unbounded(tree, unclamped)
     tree.merge(later)

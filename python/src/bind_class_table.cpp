@@ -34,6 +34,8 @@ void bindClassTable(nb::module_& m) {
       .def_ro("names", &ClassTable::names, "C class names, index = class id.")
       .def_ro("ground", &ClassTable::ground,
               "C flags: the class is a ground surface (its points' kernel support is flatter).")
+      .def_ro("movable", &ClassTable::movable,
+              "C flags: the class moves (movable_clearing_observations clears it).")
       .def_prop_ro("colors", &colorArray, kShared, "(C, 3) uint8 RGB colours.")
       .def_ro("ignore_class", &ClassTable::ignore_class,
               "Class excluded from evaluation queries (-1: none).")

@@ -255,17 +255,19 @@ void bindTree(nb::module_& m) {
       .def(nb::new_([](double resolution, const ClassTable& classes,
                        std::optional<SemanticConfig> config) {
              auto tree = makeTree(resolution, classes.names, config);
-             tree->setGroundClasses(classes.ground);
+             tree->setClasses(classes);
              return tree;
            }),
            nb::arg("resolution"), nb::arg("classes"), nb::arg("config") = nb::none(),
-           "classes: a ClassTable (its names and ground classes are used).")
+           "classes: a ClassTable (its names, ground and movable classes are used).")
       // --- settings
       .def_prop_ro("resolution", &Tree::getResolution)
       .def_prop_ro("num_classes", &Tree::numClasses)
       .def_prop_rw("class_names", &Tree::classNames, &Tree::setClassNames)
       .def_prop_rw("ground_classes", &Tree::groundClasses, &Tree::setGroundClasses,
                    "C flags (or none): classes whose points get ground_vertical_support.")
+      .def_prop_rw("movable_classes", &Tree::movableClasses, &Tree::setMovableClasses,
+                   "C flags (or none): classes that movable_clearing_observations clears.")
       .def_prop_ro(
           "config", [](const Tree& t) { return t.config(); }, "A copy of the mapping parameters.")
       .def("set_config", &Tree::setConfig, nb::arg("config"),

@@ -92,6 +92,7 @@ struct EvidentialOcTree::UpdateBatch {
   const double* rows;
   bool create_semantic_leaves;
   DroppedRows* dropped;  // nullptr: dropped rows are not kept
+  const ClearingRule* clearing;  // nullptr: no clearings
 };
 
 // The serial walk down to the subtrees.
@@ -170,6 +171,7 @@ size_t EvidentialOcTree::applySubtrees(SubtreeSource& source, bool create_semant
   // 2. The subtrees, in parallel: each thread edits its own subtrees with its own Edit.
   size_t changed = 0;
   std::vector<long long> nodes(threads, 0);
+  const ClearingRule clearing = clearingRule();
 #pragma omp parallel num_threads(threads) reduction(+ : changed)
   {
     const int thread = omp_get_thread_num();
@@ -179,7 +181,8 @@ size_t EvidentialOcTree::applySubtrees(SubtreeSource& source, bool create_semant
     for (size_t i = 0; i < pass.tasks.size(); ++i) {
       const UpdateTask& task = pass.tasks[i];
       const SubtreeView view = source.updates(task.seed, thread, task.is_new ? nullptr : task.node);
-      const UpdateBatch batch{view.rows, create_semantic_leaves, keep};
+      const UpdateBatch batch{view.rows, create_semantic_leaves, keep,
+                              clearing.keep.empty() ? nullptr : &clearing};
       if (task.node) {
         changed += applyUpdatesRecurs(task.node, tree_depth - kSubtreeLevels, task.is_new,
                                       view.begin, view.end, batch, edit);
@@ -333,14 +336,21 @@ size_t EvidentialOcTree::updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdat
   // (a mover has gone) forgets it.
   const bool cleared = update.occupancy < 0 && discountsClearings() && !isNodeOccupied(leaf);
   if (update.increments == VoxelUpdate::kNoIncrements) {
-    if (cleared) discountClearedLeaf(leaf, nullptr, edit);
+    if (cleared) discountClearedLeaf(leaf, nullptr, *batch.clearing, edit);
     return 0;
   }
   // What the voxel held before this scan is discounted, but for the classes this scan's points
   // around it still show; their kernel evidence is what a surface next to it gives its free
   // space now.
   const double* increments = batch.rows + size_t(update.increments) * num_classes_;
-  if (cleared) discountClearedLeaf(leaf, increments, edit);
+  double kept_row[kMaxClasses];
+  if (cleared) {
+    discountClearedLeaf(leaf, increments, *batch.clearing, edit);
+    // A voxel seen empty takes no evidence of a movable class: a mover beside it spreads it.
+    for (int c = 0; c < num_classes_; ++c)
+      kept_row[c] = batch.clearing->movable[c] ? 0.0 : increments[c];
+    increments = kept_row;
+  }
   float values[kMaxClasses];
   leafValues(leaf, values);
   rule_->add(values, increments, num_classes_);

@@ -28,6 +28,16 @@ ClassTable ClassTable::load(const std::string& yaml_path) {
     throw fail(std::string("not valid YAML: ") + e.what());
   }
   ClassTable table;
+  // A class's yes/no property (ground, movable): false when left out.
+  const auto readFlag = [&](const YAML::Node& entry, const std::string& key) {
+    bool value = false;
+    const YAML::Node flag = entry[key];
+    if (flag && !YAML::convert<bool>::decode(flag, value)) {
+      throw fail("class '" + table.names.back() + "': " + key + " must be true or false, not '" +
+                 flag.as<std::string>() + "'");
+    }
+    return value;
+  };
   try {
     table.dataset = root["dataset"] ? root["dataset"].as<std::string>() : "unnamed";
     const YAML::Node classes = root["classes"];
@@ -48,13 +58,8 @@ ClassTable ClassTable::load(const std::string& yaml_path) {
         rgb[i] = static_cast<uint8_t>(v);
       }
       table.colors.push_back(rgb);
-      bool ground = false;
-      const YAML::Node flag = entry["ground"];
-      if (flag && !YAML::convert<bool>::decode(flag, ground)) {
-        throw fail("class '" + table.names.back() + "': ground must be true or false, not '" +
-                   flag.as<std::string>() + "'");
-      }
-      table.ground.push_back(ground);
+      table.ground.push_back(readFlag(entry, "ground"));
+      table.movable.push_back(readFlag(entry, "movable"));
     }
     table.ignore_class = root["ignore_class"] ? root["ignore_class"].as<int>() : -1;
     if (table.ignore_class >= table.numClasses()) throw fail("ignore_class out of range");

@@ -3,7 +3,9 @@
 // Dempster-Shafer contextual discounting in the stored form: the evidence above the prior of
 // every class that this scan's points around the voxel do not show is scaled by one factor, so
 // the shares among them stay; a class the scan's kernel row still gives the voxel (a static
-// surface beside it, seen again) keeps what it had.
+// surface beside it, seen again) keeps what it had. A movable class (a class table's person or
+// vehicle) is never protected so: a mover's own points spread it into the voxels it has just
+// left, which rays may not cross again once it has gone.
 #include <algorithm>
 
 #include "evidential_octomap/evidential_octree.h"
@@ -17,19 +19,37 @@ constexpr double kShownShare = 0.25;
 
 }  // namespace
 
+EvidentialOcTree::ClearingRule EvidentialOcTree::clearingRule() const {
+  if (!discountsClearings()) return {};
+  ClearingRule rule{std::vector<double>(num_classes_), std::vector<char>(num_classes_)};
+  for (int c = 0; c < num_classes_; ++c) {
+    const bool movable = size_t(c) < movable_classes_.size() && movable_classes_[c];
+    rule.keep[c] = InsertSettings::clearingKeep(config_.clearingsOf(movable));
+    rule.movable[c] = movable && config_.movable_clearing_observations > 0;
+  }
+  return rule;
+}
+
+void EvidentialOcTree::updateDiscountsClearings() {
+  const bool any_movable =
+      std::find(movable_classes_.begin(), movable_classes_.end(), true) != movable_classes_.end();
+  discounts_clearings_ = config_.clearingsOf(any_movable) > 0;
+}
+
 void EvidentialOcTree::discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments,
-                                           Edit& edit) {
+                                           const ClearingRule& rule, Edit& edit) {
   if (!leaf->hasSemantics()) return;
-  const double keep = config_.clearingKeep();
   const float prior = rule_->prior();
-  const double largest =
-      increments ? *std::max_element(increments, increments + num_classes_) : 0.0;
+  double largest = 0.0;  // of the row as it is added: without movable classes
+  for (int c = 0; increments && c < num_classes_; ++c)
+    if (!rule.movable[c]) largest = std::max(largest, increments[c]);
   float values[kMaxClasses];
   leafValues(leaf, values);
   double left = 0.0;
   for (int c = 0; c < num_classes_; ++c) {
-    const bool shown = largest > 0.0 && increments[c] >= kShownShare * largest;
-    if (!shown) values[c] = prior + float(keep * (double(values[c]) - prior));
+    const bool shown =
+        !rule.movable[c] && largest > 0.0 && increments[c] >= kShownShare * largest;
+    if (!shown) values[c] = prior + float(rule.keep[c] * (double(values[c]) - prior));
     left += double(values[c]) - prior;
   }
   if (left >= SemanticConfig::kReleasedEvidence) {

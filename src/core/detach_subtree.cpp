@@ -21,6 +21,7 @@ std::unique_ptr<EvidentialOcTree> EvidentialOcTree::emptyLike() const {
   auto tree = std::make_unique<EvidentialOcTree>(resolution, num_classes_, config_);
   tree->class_names_ = class_names_;
   tree->ground_classes_ = ground_classes_;
+  tree->setMovableClasses(movable_classes_);
   tree->clamping_thres_min = clamping_thres_min;
   tree->clamping_thres_max = clamping_thres_max;
   tree->prob_hit_log = prob_hit_log;

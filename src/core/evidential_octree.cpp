@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "evidential_octomap/class_table.h"
 #include "evidential_octomap/safe_key.h"
 #include "node_allocator.h"
 #include "payload_store.h"
@@ -77,6 +78,8 @@ EvidentialOcTree::EvidentialOcTree(const EvidentialOcTree& rhs)
       num_classes_(rhs.num_classes_),
       class_names_(rhs.class_names_),
       ground_classes_(rhs.ground_classes_),
+      movable_classes_(rhs.movable_classes_),
+      discounts_clearings_(rhs.discounts_clearings_),
       config_(rhs.config_),
       error_model_(rhs.error_model_),
       rule_(rhs.makeRule(rhs.config_)),
@@ -112,6 +115,8 @@ void EvidentialOcTree::setNumClasses(int num_classes) {
   class_names_.clear();
   for (int c = 0; c < num_classes; ++c) class_names_.push_back("class_" + std::to_string(c));
   ground_classes_.clear();
+  movable_classes_.clear();
+  updateDiscountsClearings();
 }
 
 void EvidentialOcTree::setClassNames(const std::vector<std::string>& names) {
@@ -130,6 +135,21 @@ void EvidentialOcTree::setGroundClasses(const std::vector<bool>& ground) {
   ground_classes_ = ground;
 }
 
+void EvidentialOcTree::setClasses(const ClassTable& classes) {
+  setClassNames(classes.names);
+  setGroundClasses(classes.ground);
+  setMovableClasses(classes.movable);
+}
+
+void EvidentialOcTree::setMovableClasses(const std::vector<bool>& movable) {
+  if (!movable.empty() && static_cast<int>(movable.size()) != num_classes_) {
+    throw std::invalid_argument("expected " + std::to_string(num_classes_) +
+                                " movable flags (or none), got " + std::to_string(movable.size()));
+  }
+  movable_classes_ = movable;
+  updateDiscountsClearings();
+}
+
 void EvidentialOcTree::setConfig(const SemanticConfig& config) {
   const std::string problem = config.problem();
   if (!problem.empty()) throw std::invalid_argument("semantic config: " + problem);
@@ -142,6 +162,7 @@ void EvidentialOcTree::setConfig(const SemanticConfig& config) {
         "' -> '" + config.rule + "')");
   }
   config_ = config;
+  updateDiscountsClearings();
   rule_ = std::move(rule);
   pool_->setPrior(rule_->prior());  // refused above while payloads depend on it
   integrator_.reset();

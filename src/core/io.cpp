@@ -193,12 +193,12 @@ std::unique_ptr<octomap::ColorOcTree> toColorOcTree(const EvidentialOcTree& tree
   // ColorOcTree's own data format and let ColorOcTree read it.
   std::stringstream data;
   std::function<void(const EvidentialOcTreeNode*)> writeNode = [&](const EvidentialOcTreeNode* node) {
-    ClassTable::Rgb rgb{128, 128, 128};  // no semantic evidence
+    ClassTable::Rgb rgb{128, 128, 128};  // no semantic evidence, or no class answered
     if (node->hasSemantics()) {
       const VoxelOpinion o = tree.opinion(node);
       if (mode == ColorMode::kClass && o.label >= 0) rgb = classes.colors[o.label];
       if (mode == ColorMode::kVacuity) rgb = uncertaintyColor(o.uncertainty / max_uncertainty);
-      if (mode == ColorMode::kUncertainty)
+      if (mode == ColorMode::kUncertainty && o.label >= 0)  // P(label wrong) needs a label
         rgb = uncertaintyColor(tree.rule().errorProbability(o) / max_error);
     }
     const float value = node->getValue();

@@ -65,9 +65,15 @@ void SemanticConfig::print(std::ostream& out) const {
   }
 }
 
-double InsertSettings::clearingKeep() const {
-  if (clearing_observations <= 0) return 1.0;
-  return std::pow(0.5 * kReleasedEvidence / kMaxStoredLogEvidence, 1.0 / clearing_observations);
+double InsertSettings::clearingKeep(int clearings) {
+  if (clearings <= 0) return 1.0;
+  return std::pow(0.5 * kReleasedEvidence / kMaxStoredLogEvidence, 1.0 / clearings);
+}
+
+int InsertSettings::clearingsOf(bool movable) const {
+  if (!movable || movable_clearing_observations <= 0) return clearing_observations;
+  if (clearing_observations <= 0) return movable_clearing_observations;
+  return std::min(clearing_observations, movable_clearing_observations);
 }
 
 double MapSettings::adaptiveEvidenceCap(double mean_point_log_evidence) {

@@ -134,6 +134,12 @@ std::vector<Setting> makeList() {
           "is gone: moving objects leave no ghosts (0: off; sequential mapping only)")
         .range({0.0, double(InsertSettings::kMaxClearingObservations), false, false, kNaN,
                 "in [0, 1000] (0: off)"}),
+    Entry("movable_clearing_observations", &InsertSettings::movable_clearing_observations,
+          kInsert,
+          "The same for the classes the class table marks movable (people, vehicles), where it "
+          "comes first (0: off; sequential mapping only)")
+        .range({0.0, double(InsertSettings::kMaxClearingObservations), false, false, kNaN,
+                "in [0, 1000] (0: off)"}),
     Entry("other_class_weight", &InsertSettings::other_class_weight, kInsert,
           "A point's kernel weight in voxels that this scan's points show to hold other classes "
           "and not the point's (1: classes ignored; 0: the support stops there), so thin objects "

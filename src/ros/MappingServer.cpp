@@ -218,8 +218,7 @@ void MappingServer::subscribeInputs() {
 std::unique_ptr<EvidentialOcTree> MappingServer::makeTree(const SemanticConfig& semantic) {
   const double resolution = tree_ ? tree_->getResolution() : config_.resolution;
   auto tree = std::make_unique<EvidentialOcTree>(resolution, config_.num_classes, semantic);
-  tree->setClassNames(classes_.names);
-  tree->setGroundClasses(classes_.ground);
+  tree->setClasses(classes_);
   if (tree_) {  // keep the sensor model in use (it may have been changed at run time)
     tree->setSensorModel(tree_->sensorModel());
   } else {
@@ -622,8 +621,7 @@ std::unique_ptr<EvidentialOcTree> MappingServer::readMapFile(const std::string& 
   std::unique_ptr<EvidentialOcTree> tree;
   if (*occupancy_only) {
     tree = loadBinaryOccupancy(path, config_.num_classes, SemanticConfig());  // see adoptMap
-    tree->setClassNames(classes_.names);
-    tree->setGroundClasses(classes_.ground);
+    tree->setClasses(classes_);
   } else {
     const uint64_t limit =
         config_.load_map_max_mb > 0.0 ? uint64_t(config_.load_map_max_mb * 1e6) : 0;
@@ -642,6 +640,7 @@ void MappingServer::adoptMap(std::unique_ptr<EvidentialOcTree> map, bool occupan
     map->setConfig(tree_->config());
     map->setSensorModel(tree_->sensorModel());
   }
+  map->setMovableClasses(classes_.movable);  // not stored in an .ot
   attachErrorModel(map.get());
   tree_ = std::move(map);
   restartLocalMap();

@@ -70,7 +70,8 @@ void addExportCommand(CLI::App& app) {
   cmd->add_option("--binary", o->binary, "Output occupancy-only OcTree (.bt)");
   cmd->add_option("--mode", o->mode,
                   "Colours: class, uncertainty (the error probability, P(label wrong): the "
-                  "--calibration file's error model, else 1 - max p) or vacuity (u)")
+                  "--calibration file's error model, else 1 - max p; grey where no class is "
+                  "answered) or vacuity (u)")
       ->check(CLI::IsMember({"class", "uncertainty", "vacuity"}))
       ->capture_default_str();
   cmd->add_option("--classes", o->classes,

@@ -169,8 +169,7 @@ MapRun runMapping(const std::vector<Scan>& scans, const std::vector<size_t>& whi
                   const LocalMapOptions& local_map) {
   MapRun run;
   run.tree = std::make_unique<EvidentialOcTree>(resolution, classes.numClasses(), config);
-  run.tree->setClassNames(classes.names);
-  run.tree->setGroundClasses(classes.ground);
+  run.tree->setClasses(classes);
   std::unique_ptr<LocalMap> local;
   if (local_map.radius > 0.0) {
     local = std::make_unique<LocalMap>(run.tree.get(), local_map.tile_directory, local_map.radius);

@@ -170,6 +170,7 @@ class MappingNode(Node):
                 raise ValueError(f"{start} has {self.tree.num_classes} classes, the class table "
                                  f"{self.classes.num_classes}")
             self.tree.set_config(config)
+            self.tree.movable_classes = self.classes.movable  # not stored in an .ot
         else:
             self.tree = _core.EvidentialOcTree(v["resolution"], self.classes, config)
         self._set_sensor_model(v)
