@@ -106,25 +106,26 @@ TEST(ClassTable, GroundFlagThatIsNotABooleanThrowsNamingTheFile) {
   expectThrowNaming<std::runtime_error>([&] { ClassTable::load(path); }, {path, "maybe"});
 }
 
+// The names of the classes whose flag is set.
+std::vector<std::string> namesWhere(const ClassTable& table, const std::vector<bool>& flags) {
+  std::vector<std::string> names;
+  for (int c = 0; c < table.numClasses(); ++c) {
+    if (flags[c]) names.push_back(table.names[c]);
+  }
+  return names;
+}
+
 TEST(ClassTable, ShippedTablesMarkTheirGroundSurfaces) {
   const ClassTable kitti = ClassTable::load(kSourceDir + "/config/classes_semantickitti.yaml");
-  std::vector<std::string> ground;
-  for (int c = 0; c < kitti.numClasses(); ++c) {
-    if (kitti.ground[c]) ground.push_back(kitti.names[c]);
-  }
-  EXPECT_EQ(ground, (std::vector<std::string>{"road", "parking", "sidewalk", "other-ground",
-                                              "terrain"}));
+  EXPECT_EQ(namesWhere(kitti, kitti.ground),
+            (std::vector<std::string>{"road", "parking", "sidewalk", "other-ground", "terrain"}));
 }
 
 TEST(ClassTable, ShippedTablesMarkPeopleAndVehiclesMovable) {
   const ClassTable kitti = ClassTable::load(kSourceDir + "/config/classes_semantickitti.yaml");
-  std::vector<std::string> movable;
-  for (int c = 0; c < kitti.numClasses(); ++c) {
-    if (kitti.movable[c]) movable.push_back(kitti.names[c]);
-  }
-  EXPECT_EQ(movable, (std::vector<std::string>{"car", "bicycle", "motorcycle", "truck",
-                                               "other-vehicle", "person", "bicyclist",
-                                               "motorcyclist"}));
+  EXPECT_EQ(namesWhere(kitti, kitti.movable),
+            (std::vector<std::string>{"car", "bicycle", "motorcycle", "truck", "other-vehicle",
+                                      "person", "bicyclist", "motorcyclist"}));
   for (const char* family : {"rellis3d", "offroad_farm", "offroad_forest", "offroad_grassland",
                              "offroad_rocky"}) {
     const ClassTable table =

@@ -195,56 +195,42 @@ void walkThenEmpty(EvidentialOcTree* tree, PersonRun* run, int empty_scans) {
   for (int scan = 0; scan < empty_scans; ++scan) insertScan(empty, tree);
 }
 
+// The person walks past, then 10 scans of the empty street: most of its volume is freed (by ray
+// casting or fast free space), at most 2 % of that still answers `person`, and the road under
+// its path still answers road.
+void expectFewGhostsAndTheRoad(EvidentialOcTree* tree) {
+  PersonRun run;
+  walkThenEmpty(tree, &run, 10);
+  const GhostShare after10 = ghostShare(*tree, run);
+  EXPECT_GT(after10.freed, run.swept.size() / 2);
+  EXPECT_LE(after10.ghosts, 0.02);
+  size_t road = 0;
+  EXPECT_GE(roadShare(*tree, run, &road), 0.95);
+  EXPECT_GT(road, 20u);
+}
+
 // Library defaults with the mode on (it is off by default: docs/long_missions.md).
 TEST(MovingObjects, DefaultsLeaveFewGhostsTenScansAfterThePersonLeft) {
   EvidentialOcTree tree = streetMap(kClearings);
-  PersonRun run;
-  walkThenEmpty(&tree, &run, 10);
-  const GhostShare after10 = ghostShare(tree, run);
-  EXPECT_GT(after10.freed, run.swept.size() / 2);  // ray casting freed most of it
-  EXPECT_LE(after10.ghosts, 0.02);
-  size_t road = 0;
-  EXPECT_GE(roadShare(tree, run, &road), 0.95);
-  EXPECT_GT(road, 20u);
+  expectFewGhostsAndTheRoad(&tree);
 }
 
 TEST(MovingObjects, LiveProfileLeavesFewGhostsAndKeepsTheRoad) {
   SemanticConfig live = liveProfile();
   live.clearing_observations = kClearings;
   EvidentialOcTree tree = streetMap(live);
-  PersonRun run;
-  walkThenEmpty(&tree, &run, 10);
-  const GhostShare after10 = ghostShare(tree, run);
-  EXPECT_GT(after10.freed, run.swept.size() / 2);  // fast free space freed most of it too
-  EXPECT_LE(after10.ghosts, 0.02);
-  size_t road = 0;
-  EXPECT_GE(roadShare(tree, run, &road), 0.95);
-  EXPECT_GT(road, 20u);
+  expectFewGhostsAndTheRoad(&tree);
 }
 
 // The defaults clear the classes a class table marks movable after one clearing.
 TEST(MovingObjects, DefaultsLeaveFewGhostsOfAMovableClass) {
   EvidentialOcTree tree = streetMap(SemanticConfig(), true);
-  PersonRun run;
-  walkThenEmpty(&tree, &run, 10);
-  const GhostShare after10 = ghostShare(tree, run);
-  EXPECT_GT(after10.freed, run.swept.size() / 2);
-  EXPECT_LE(after10.ghosts, 0.02);
-  size_t road = 0;
-  EXPECT_GE(roadShare(tree, run, &road), 0.95);
-  EXPECT_GT(road, 20u);
+  expectFewGhostsAndTheRoad(&tree);
 }
 
 TEST(MovingObjects, LiveProfileLeavesFewGhostsOfAMovableClass) {
   EvidentialOcTree tree = streetMap(liveProfile(), true);
-  PersonRun run;
-  walkThenEmpty(&tree, &run, 10);
-  const GhostShare after10 = ghostShare(tree, run);
-  EXPECT_GT(after10.freed, run.swept.size() / 2);
-  EXPECT_LE(after10.ghosts, 0.02);
-  size_t road = 0;
-  EXPECT_GE(roadShare(tree, run, &road), 0.95);
-  EXPECT_GT(road, 20u);
+  expectFewGhostsAndTheRoad(&tree);
 }
 
 TEST(MovingObjects, WithoutDiscountTheGhostStays) {

@@ -142,11 +142,10 @@ struct InsertSettings {
   // the kernel evidence a scan spreads into a free voxel is kept for that scan, and a class that
   // scan's kernel row shows keeps what the voxel held (contextual discounting; the other classes
   // keep their shares: dempster L^c scaled, sbki/ebs alpha^c - prior scaled). 0: off, the
-  // default: on the bundled static street K = 3 costs mIoU and Brier score outside the bootstrap
-  // intervals (docs/experiments/clearing_static_cost.md, docs/long_missions.md). An
-  // insertion setting: not stored in the map. Sequential mapping only: a merge of chunk maps
-  // cannot apply one chunk's clearings to another chunk's evidence, so batch mapping equals
-  // sequential mapping with this setting at 0.
+  // default: on the static points of the bundled street K = 3 raises the Brier score
+  // (docs/experiments/clearing_static_cost.md, docs/long_missions.md). An insertion setting:
+  // not stored in the map. Sequential mapping only: a merge of chunk maps cannot apply one
+  // chunk's clearings to another chunk's evidence, so batch mapping runs with it at 0.
   int clearing_observations = 0;
   // The same for the classes a class table marks movable (ClassTable::movable, set on the tree
   // by setMovableClasses: people, vehicles), the classes that leave ghosts; it applies where it
