@@ -335,8 +335,9 @@ size_t EvidentialOcTree::updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdat
   // A surface that a ray grazes stays occupied and keeps its class; a voxel the clearings freed
   // (a mover has gone) forgets it.
   const bool cleared = update.occupancy < 0 && discountsClearings() && !isNodeOccupied(leaf);
+  float values[kMaxClasses];
   if (update.increments == VoxelUpdate::kNoIncrements) {
-    if (cleared) discountClearedLeaf(leaf, nullptr, *batch.clearing, edit);
+    if (cleared) discountClearedLeaf(leaf, nullptr, *batch.clearing, values, edit);
     return 0;
   }
   // What the voxel held before this scan is discounted, but for the classes this scan's points
@@ -345,14 +346,14 @@ size_t EvidentialOcTree::updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdat
   const double* increments = batch.rows + size_t(update.increments) * num_classes_;
   double kept_row[kMaxClasses];
   if (cleared) {
-    discountClearedLeaf(leaf, increments, *batch.clearing, edit);
+    discountClearedLeaf(leaf, increments, *batch.clearing, values, edit);
     // A voxel seen empty takes no evidence of a movable class: a mover beside it spreads it.
     for (int c = 0; c < num_classes_; ++c)
       kept_row[c] = batch.clearing->movable[c] ? 0.0 : increments[c];
     increments = kept_row;
+  } else {
+    leafValues(leaf, values);
   }
-  float values[kMaxClasses];
-  leafValues(leaf, values);
   rule_->add(values, increments, num_classes_);
   storeLeafValues(leaf, values, edit);
   return 1;

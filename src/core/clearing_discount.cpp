@@ -37,28 +37,36 @@ void EvidentialOcTree::updateDiscountsClearings() {
 }
 
 void EvidentialOcTree::discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments,
-                                           const ClearingRule& rule, Edit& edit) {
+                                           const ClearingRule& rule, float* values, Edit& edit) {
+  leafValues(leaf, values);
   if (!leaf->hasSemantics()) return;
   const float prior = rule_->prior();
   double largest = 0.0;  // of the row as it is added: without movable classes
   for (int c = 0; increments && c < num_classes_; ++c)
     if (!rule.movable[c]) largest = std::max(largest, increments[c]);
-  float values[kMaxClasses];
-  leafValues(leaf, values);
   double left = 0.0;
+  bool changed = false;
   for (int c = 0; c < num_classes_; ++c) {
     const bool shown =
         !rule.movable[c] && largest > 0.0 && increments[c] >= kShownShare * largest;
-    if (!shown) values[c] = prior + float(rule.keep[c] * (double(values[c]) - prior));
+    if (!shown && values[c] != prior) {
+      const float kept = prior + float(rule.keep[c] * (double(values[c]) - prior));
+      changed |= kept != values[c];
+      values[c] = kept;
+    }
     left += double(values[c]) - prior;
   }
   if (left >= SemanticConfig::kReleasedEvidence) {
-    storeLeafValues(leaf, values, edit);
-  } else if (config_.semantic_occupied_only) {
+    // Most cleared voxels hold no movable class and only those are discounted by default:
+    // nothing to store.
+    if (changed) storeLeafValues(leaf, values, edit);
+    return;
+  }
+  std::fill_n(values, num_classes_, prior);
+  if (config_.semantic_occupied_only) {
     // A surface map answers a voxel without a payload from the surface around it
     // (query_support.cpp), which is where a mover's evidence lingers: a vacuous payload keeps
     // this voxel, seen empty, answering no class, as the default map's released voxel does.
-    std::fill_n(values, num_classes_, prior);
     storeLeafValues(leaf, values, edit);
   } else {
     releaseLeafPayload(leaf, edit);
