@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Writes docs/experiments/moving_objects.md: bench/moving_street.cpp's ghosts of movers on
 SYNTHETIC street scenes for the library defaults and the live profile (config/mapping_live.yaml),
-each also with clearing_observations 3, beside plain OctoMap fed the same rays.
+each also with movable_clearing_observations 2 and with the clearing off, beside plain OctoMap
+fed the same rays.
 Usage (from the repository root, after building evidential_moving_street):
   bench/moving_objects_report.py [BUILD_DIR=build/core]"""
 import datetime

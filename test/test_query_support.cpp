@@ -88,6 +88,28 @@ TEST_F(QuerySupport, KnownVoxelWithoutEvidenceAnswersTheDiscountedKernelMeanOfIt
   EXPECT_EQ(tree.query(tree.keyToCoord(kCentre)).label, 0);  // the nearer voxel's class
 }
 
+TEST_F(QuerySupport, AFreeVoxelAnswersNoMovableClassWhileMovableClearingIsOn) {
+  // Class 0 (the near neighbour's) moves. Rays found the query voxel empty: with movable
+  // clearing on (the default) its answer holds the neighbours' other classes only, weighted as
+  // before; an occupied voxel, or a map that does not clear movers, still answers class 0.
+  tree.setMovableClasses({true, false, false});
+  const double k_near = kernelAt(0.1), k_far = kernelAt(0.3);
+  const float prior = tree.rule().prior();
+  float got[kClasses];
+  ASSERT_TRUE(tree.answerPayload(kCentre, got));
+  EXPECT_EQ(tree.answer(kCentre).label, 0);  // log-odds 0: occupied
+  tree.updateNode(kCentre, false);
+  ASSERT_FALSE(tree.isNodeOccupied(tree.search(kCentre)));
+  ASSERT_TRUE(tree.answerPayload(kCentre, got));
+  EXPECT_EQ(got[0], prior);
+  EXPECT_NEAR(got[1], prior + k_near * k_far * (far_values[1] - prior) / (k_near + k_far), 1e-5);
+  EXPECT_EQ(tree.answer(kCentre).label, 1);
+  SemanticConfig keeps_movers = surfaceOnly();
+  keeps_movers.movable_clearing_observations = 0;
+  tree.setConfig(keeps_movers);
+  EXPECT_EQ(tree.answer(kCentre).label, 0);
+}
+
 TEST_F(QuerySupport, TheAnswerDoesNotDiscountAPointsReliabilityTwice) {
   // The same stored evidence answers the same whatever sigma0 the map was made with: sigma0
   // discounted each point where it was fused.

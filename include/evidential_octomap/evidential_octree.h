@@ -196,7 +196,8 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // The map's answer at a point: the opinion of its voxel's own evidence, or, when the map keeps
   // its evidence on the surface (config().semantic_occupied_only) and the voxel is known without
   // any, the answer of the voxels with evidence within a point's full kernel support
-  // (query_support.cpp); vacuous (label -1) in unknown space.
+  // (query_support.cpp; a free voxel's without the movable classes while they are cleared);
+  // vacuous (label -1) in unknown space.
   VoxelOpinion query(const octomap::point3d& point_W) const;
   VoxelOpinion answer(const octomap::OcTreeKey& key) const;
   // The same answer as payload values (C floats into `out`); false where there is none.
@@ -266,7 +267,8 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   double queryLength() const;
   std::array<int, 3> querySupportReach() const;  // voxels on x, y, z
   double querySupportVertical() const;            // the tallest neighbour support / width
-  bool supportPayload(const octomap::OcTreeKey& key, float* out) const;
+  // `free_voxel`: the voxel is free, so (movable clearing on) no movable class is answered.
+  bool supportPayload(const octomap::OcTreeKey& key, bool free_voxel, float* out) const;
   // Editing: detail/tree_editing.h says what each does.
   EvidentialOcTreeNode* leafForUpdate(const octomap::OcTreeKey& key, bool create);
   void setPayload(EvidentialOcTreeNode* leaf, const float* values);
@@ -301,9 +303,9 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   ClearingRule clearingRule() const;
   // A clearing observation of a leaf: its payload discounted by the rule, released below
   // kReleasedEvidence (SemanticConfig::clearing_observations); `increments`: this scan's kernel
-  // row for the leaf (C values), or nullptr.
+  // row for the leaf (C values), or nullptr; `values` (C floats) get the leaf's values after it.
   void discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments,
-                           const ClearingRule& rule, Edit& edit);
+                           const ClearingRule& rule, float* values, Edit& edit);
   bool discountsClearings() const { return discounts_clearings_; }
   void updateDiscountsClearings();
   void expandLeaf(EvidentialOcTreeNode* node, Edit& edit);

@@ -38,7 +38,8 @@ double EvidentialOcTree::queryLength() const {
              : config_.length_scale;
 }
 
-bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out) const {
+bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, bool free_voxel,
+                                      float* out) const {
   const std::array<int, 3> reach = querySupportReach();
   const double widest = querySupportVertical();
   const double length = queryLength();
@@ -47,6 +48,10 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out)
   double sum[kMaxClasses] = {};
   double weight_sum = 0.0, nearest = 0.0;
   float values[kMaxClasses];
+  const bool forget_movable = free_voxel && config_.movable_clearing_observations > 0;
+  bool answered[kMaxClasses];
+  for (int c = 0; c < num_classes_; ++c)
+    answered[c] = !(forget_movable && size_t(c) < movable_classes_.size() && movable_classes_[c]);
   for (int dz = -reach[2]; dz <= reach[2]; ++dz) {
     for (int dy = -reach[1]; dy <= reach[1]; ++dy) {
       for (int dx = -reach[0]; dx <= reach[0]; ++dx) {
@@ -69,7 +74,8 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, float* out)
             isGroundClass(label) ? config_.ground_vertical_support : config_.vertical_support;
         const double k = up == widest ? k_widest : weight(up);
         if (!(k > 0.0)) continue;
-        for (int c = 0; c < num_classes_; ++c) sum[c] += k * (double(values[c]) - prior);
+        for (int c = 0; c < num_classes_; ++c)
+          if (answered[c]) sum[c] += k * (double(values[c]) - prior);
         weight_sum += k;
         nearest = std::max(nearest, k);
       }
@@ -88,7 +94,7 @@ bool EvidentialOcTree::answerPayload(const octomap::OcTreeKey& key, float* out) 
   // Only a map that keeps its evidence on the surface answers free space from it: in the
   // default map free space near surfaces holds evidence of its own, and a voxel without any
   // (beyond every support, or cleared by clearBox) has no answer.
-  return config_.semantic_occupied_only && supportPayload(key, out);
+  return config_.semantic_occupied_only && supportPayload(key, !isNodeOccupied(node), out);
 }
 
 VoxelOpinion EvidentialOcTree::answer(const octomap::OcTreeKey& key) const {
