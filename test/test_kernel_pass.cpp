@@ -10,9 +10,11 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <random>
 #include <set>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -703,6 +705,65 @@ TEST(KernelPass, OneHotRoadStaysWithinTheTableErrorOfDirectEvaluationOnARealScan
   EXPECT_GT(with_evidence, 5000u);
   RecordProperty("points", std::to_string(scan.points_W.size()));
   RecordProperty("leaves_with_evidence", std::to_string(with_evidence));
+}
+
+// KernelPoint::reach bounds the voxels a point's loop visits: every voxel within its support
+// (the kernel's distance, sparse_kernel.h, from the float position the map keeps to the voxel
+// as keyToCoord places it, below the support length) must lie within it, for supports just
+// under and at whole numbers of voxels, far from the origin (float rounding), both distances.
+TEST(KernelPass, ReachHoldsEveryVoxelWithinTheSupport) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> within(-0.5, 0.5);
+  for (const char* distance : {"voxel", "centre"}) {
+    for (double length : {0.2 - 1e-6, 0.2, 0.3, 0.4 - 1e-6, 0.5}) {
+      for (double vertical : {1.0, 0.5}) {
+        SemanticConfig config;
+        config.rule = "sbki";  // the support length is length_scale itself
+        config.length_scale = length;
+        config.kernel_distance = distance;
+        config.vertical_support = vertical;
+        EvidentialOcTree tree(0.2, 3, config);
+        KernelPass kernel(config, tree);
+        SemanticPoints semantic;
+        const float evidence[3] = {5.0f, 0.0f, 0.0f};
+        for (int i = 0; i < 2000; ++i) {
+          const octomap::OcTreeKey key(32768 + 250 + i % 7, 32768 - 240, 32768 + 3);
+          const octomap::point3d centre = tree.keyToCoord(key);
+          semantic.positions.emplace_back(centre.x() + float(0.2 * within(random)),
+                                          centre.y() + float(0.2 * within(random)),
+                                          centre.z() + float(0.2 * within(random)));
+          semantic.evidence.push_back(evidence);
+        }
+        std::vector<KernelPoint> points;
+        kernel.preparePoints(semantic, 1, &points);
+        const double half = std::string(distance) == "voxel" ? 0.1 : 0.0;
+        size_t at_the_edge = 0;  // voxels inside the support at an offset of +-reach
+        for (size_t j = 0; j < points.size(); ++j) {
+          const KernelPoint& p = points[j];
+          const octomap::point3d& at = semantic.positions[j];
+          for (int dx = -p.reach[0] - 2; dx <= p.reach[0] + 2; ++dx)
+            for (int dy = -2; dy <= 2; ++dy)
+              for (int dz = -p.reach[2] - 2; dz <= p.reach[2] + 2; ++dz) {
+                const octomap::point3d c = tree.keyToCoord(octomap::OcTreeKey(
+                    p.key[0] + dx, p.key[1] + dy, p.key[2] + dz));
+                const double d = kernelDistance(at.x() - c.x(), at.y() - c.y(), at.z() - c.z(),
+                                                half, vertical);
+                if (!(d < length)) continue;
+                ASSERT_LE(std::abs(dx), p.reach[0]) << distance << " L " << length;
+                ASSERT_LE(std::abs(dy), p.reach[1]) << distance << " L " << length;
+                ASSERT_LE(std::abs(dz), p.reach[2]) << distance << " L " << length;
+                at_the_edge += std::abs(dx) == p.reach[0] ? 1 : 0;
+              }
+        }
+        // Not wider than needed, but where the margin for rounding adds a voxel: a support
+        // of a whole number of voxels (plus the own voxel's half or whole), or just under it.
+        const double across = length / 0.2 + (half > 0.0 ? 1.0 : 0.5);
+        const double fraction = across - std::floor(across);
+        if (fraction > 0.0 && fraction < 0.99)
+          EXPECT_GT(at_the_edge, 0u) << distance << " L " << length << ": reach wider than needed";
+      }
+    }
+  }
 }
 
 }  // namespace

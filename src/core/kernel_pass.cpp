@@ -84,10 +84,13 @@ void KernelPass::preparePoints(const SemanticPoints& points, int threads,
         tree_.isGroundClass(o.argmax) ? ground_vertical_support_ : vertical_support_;
     kp.inv_length2_z = kp.inv_length2 / (vertical * vertical);
     // A voxel can take part when its cube (or centre) is within L on x and y, and within
-    // L * vertical on z.
-    const double extra = to_cube_ ? 1.0 : 0.5;
-    kp.reach[0] = kp.reach[1] = static_cast<int>(std::floor(length / resolution + extra)) + 1;
-    kp.reach[2] = static_cast<int>(std::floor(length * vertical / resolution + extra)) + 1;
+    // L * vertical on z. The point lies anywhere in its own voxel, so at offset o that gap is
+    // at least (|o| - 1) res ((|o| - 1/2) res to the centre): o is reached while that is < L.
+    // A hundredth of a voxel more covers the rounding of float positions; beyond the reach
+    // every voxel's kernel is 0, so the reach bounds work, not the map.
+    const double extra = (to_cube_ ? 1.0 : 0.5) + 0.01;
+    kp.reach[0] = kp.reach[1] = static_cast<int>(std::floor(length / resolution + extra));
+    kp.reach[2] = static_cast<int>(std::floor(length * vertical / resolution + extra));
     kp.key = tree_.coordToKey(points.positions[j]);
   }
   buildOneHotTables(out);
