@@ -478,6 +478,22 @@ TEST(ClearingDiscount, AVoxelSeenEmptyTakesNoEvidenceOfAMovableClass) {
   EXPECT_GT(tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false))[kPerson], 1.0f);
 }
 
+// Only the movable classes clear by default: a voxel that holds none of them keeps its static
+// evidence bit for bit however often rays find it empty, even below the release threshold.
+TEST(ClearingDiscount, AVoxelWithoutMovableEvidenceKeepsItsStaticEvidence) {
+  EvidentialOcTree tree = streetMap(SemanticConfig());
+  tree.setMovableClasses({false, true, false, false});
+  const octomap::OcTreeKey key(32768, 32768, 32768);
+  std::vector<double> held(kClasses, 0.0);
+  held[kWall] = 0.5 * SemanticConfig::kReleasedEvidence;
+  detail::TreeEditing::applyUpdates(tree, {VoxelUpdate{key, -1, 0}}, held, false);
+  const std::vector<float> before =
+      tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false));
+  ASSERT_GT(before[kWall], 0.0f);
+  clear(&tree, key, 5);
+  EXPECT_EQ(tree.payload(detail::TreeEditing::leafForUpdate(tree, key, false)), before);
+}
+
 TEST(ClearingDiscount, WithoutMovableClassesTheDefaultsClearNothing) {
   EvidentialOcTree tree = streetMap(SemanticConfig());
   const octomap::OcTreeKey key(32768, 32768, 32768);

@@ -1,6 +1,7 @@
 // PayloadStore, the sparse store of semantic payloads: after any sequence of stores, copies and
 // releases every payload decodes to exactly (bit for bit) the C floats last stored, its sum is
-// the class-order sum of those floats, and a payload costs the slot of its non-prior classes.
+// the class-order sum of those floats, holdsAny tells which classes differ from the prior's
+// bits, and a payload costs the slot of its non-prior classes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -77,6 +78,19 @@ TEST(PayloadStore, RandomSequencesDecodeToTheDenseReference) {
         ASSERT_TRUE(sameBits(decoded, reference[i])) << "C " << num_classes << " prior " << prior;
         const double sum = std::accumulate(reference[i].begin(), reference[i].end(), 0.0);
         ASSERT_EQ(store.sum(refs[i]), sum) << "C " << num_classes << " prior " << prior;
+        // holdsAny against the reference's bits, for one class and for a random set.
+        const int c = int(rng() % num_classes);
+        std::vector<uint32_t> one((num_classes + 31) / 32, 0), some(one.size(), 0);
+        one[c / 32] = uint32_t(1) << (c % 32);
+        bool any = false;
+        for (int k = 0; k < num_classes; ++k) {
+          if (rng() % 4) continue;
+          some[k / 32] |= uint32_t(1) << (k % 32);
+          any |= std::memcmp(&reference[i][k], &prior, sizeof(float)) != 0;
+        }
+        ASSERT_EQ(store.holdsAny(refs[i], one.data()),
+                  std::memcmp(&reference[i][c], &prior, sizeof(float)) != 0);
+        ASSERT_EQ(store.holdsAny(refs[i], some.data()), any);
       }
     }
   }

@@ -299,13 +299,17 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   struct ClearingRule {
     std::vector<double> keep;
     std::vector<char> movable;
+    std::vector<uint32_t> discounted;  // the classes with keep < 1, one bit each (32 a word)
   };
   ClearingRule clearingRule() const;
   // A clearing observation of a leaf: its payload discounted by the rule, released below
   // kReleasedEvidence (SemanticConfig::clearing_observations); `increments`: this scan's kernel
-  // row for the leaf (C values), or nullptr; `values` (C floats) get the leaf's values after it.
-  void discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments,
+  // row for the leaf (C values), or nullptr. True when `values` (C floats) got the leaf's values
+  // after it; false when nothing there is discounted (the leaf untouched, `values` not set).
+  bool discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments,
                            const ClearingRule& rule, float* values, Edit& edit);
+  // Whether a clearing may change what `node` holds: evidence of a class the rule discounts.
+  bool clearingMayChange(const EvidentialOcTreeNode* node, const ClearingRule& rule) const;
   bool discountsClearings() const { return discounts_clearings_; }
   void updateDiscountsClearings();
   void expandLeaf(EvidentialOcTreeNode* node, Edit& edit);

@@ -100,6 +100,7 @@ struct EvidentialOcTree::TopPass {
   const SubtreeSeed* seeds;
   bool create_semantic_leaves;
   bool keep_dropped;
+  const ClearingRule* clearing;  // nullptr: no clearings
   std::vector<UpdateTask> tasks;
   std::vector<EvidentialOcTreeNode*> above;  // inner nodes above the subtrees, post-order
 };
@@ -166,12 +167,13 @@ size_t EvidentialOcTree::applySubtrees(SubtreeSource& source, bool create_semant
   }
   // 1. Serially down to the subtrees: nodes on the way are made or split, tasks collected.
   Edit top(pool_.get(), 1);
-  TopPass pass{seeds.data(), create_semantic_leaves, dropped != nullptr, {}, {}};
+  const ClearingRule clearing = clearingRule();
+  const ClearingRule* clears = clearing.keep.empty() ? nullptr : &clearing;
+  TopPass pass{seeds.data(), create_semantic_leaves, dropped != nullptr, clears, {}, {}};
   applyTopRecurs(root, 0, is_new, seeds.data(), seeds.data() + seeds.size(), pass, top);
   // 2. The subtrees, in parallel: each thread edits its own subtrees with its own Edit.
   size_t changed = 0;
   std::vector<long long> nodes(threads, 0);
-  const ClearingRule clearing = clearingRule();
 #pragma omp parallel num_threads(threads) reduction(+ : changed)
   {
     const int thread = omp_get_thread_num();
@@ -181,8 +183,7 @@ size_t EvidentialOcTree::applySubtrees(SubtreeSource& source, bool create_semant
     for (size_t i = 0; i < pass.tasks.size(); ++i) {
       const UpdateTask& task = pass.tasks[i];
       const SubtreeView view = source.updates(task.seed, thread, task.is_new ? nullptr : task.node);
-      const UpdateBatch batch{view.rows, create_semantic_leaves, keep,
-                              clearing.keep.empty() ? nullptr : &clearing};
+      const UpdateBatch batch{view.rows, create_semantic_leaves, keep, clears};
       if (task.node) {
         changed += applyUpdatesRecurs(task.node, tree_depth - kSubtreeLevels, task.is_new,
                                       view.begin, view.end, batch, edit);
@@ -214,7 +215,8 @@ void EvidentialOcTree::applyTopRecurs(EvidentialOcTreeNode* node, unsigned depth
     // change nothing (OctoMap's early abort); anything else splits it.
     const bool at_min = node->getLogOdds() <= clamping_thres_min;
     const bool at_max = node->getLogOdds() >= clamping_thres_max;
-    bool unchanged = (at_min || at_max) && !(discountsClearings() && node->hasSemantics());
+    bool unchanged =
+        (at_min || at_max) && !(pass.clearing && clearingMayChange(node, *pass.clearing));
     for (const SubtreeSeed* s = begin; unchanged && s != end; ++s) {
       unchanged = !(s->flags & SubtreeSeed::kMayHaveRows) &&
                   !(at_min && (s->flags & SubtreeSeed::kHasHit)) &&
@@ -271,7 +273,8 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
     // change nothing (OctoMap's early abort); anything else splits it.
     const bool at_min = node->getLogOdds() <= clamping_thres_min;
     const bool at_max = node->getLogOdds() >= clamping_thres_max;
-    bool unchanged = (at_min || at_max) && !(discountsClearings() && node->hasSemantics());
+    bool unchanged =
+        (at_min || at_max) && !(batch.clearing && clearingMayChange(node, *batch.clearing));
     for (const VoxelUpdate* u = begin; unchanged && u != end; ++u) {
       unchanged = u->increments == VoxelUpdate::kNoIncrements &&
                   ((at_min && u->occupancy < 0) || (at_max && u->occupancy > 0));
@@ -346,7 +349,8 @@ size_t EvidentialOcTree::updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdat
   const double* increments = batch.rows + size_t(update.increments) * num_classes_;
   double kept_row[kMaxClasses];
   if (cleared) {
-    discountClearedLeaf(leaf, increments, *batch.clearing, values, edit);
+    if (!discountClearedLeaf(leaf, increments, *batch.clearing, values, edit))
+      leafValues(leaf, values);
     // A voxel seen empty takes no evidence of a movable class: a mover beside it spreads it.
     for (int c = 0; c < num_classes_; ++c)
       kept_row[c] = batch.clearing->movable[c] ? 0.0 : increments[c];

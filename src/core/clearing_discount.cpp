@@ -9,6 +9,7 @@
 #include <algorithm>
 
 #include "evidential_octomap/evidential_octree.h"
+#include "payload_store.h"
 #include "tree_edit.h"
 
 namespace evidential_octomap {
@@ -21,11 +22,13 @@ constexpr double kShownShare = 0.25;
 
 EvidentialOcTree::ClearingRule EvidentialOcTree::clearingRule() const {
   if (!discountsClearings()) return {};
-  ClearingRule rule{std::vector<double>(num_classes_), std::vector<char>(num_classes_)};
+  ClearingRule rule{std::vector<double>(num_classes_), std::vector<char>(num_classes_),
+                    std::vector<uint32_t>((num_classes_ + 31) / 32, 0)};
   for (int c = 0; c < num_classes_; ++c) {
     const bool movable = size_t(c) < movable_classes_.size() && movable_classes_[c];
     rule.keep[c] = InsertSettings::clearingKeep(config_.clearingsOf(movable));
     rule.movable[c] = movable && config_.movable_clearing_observations > 0;
+    if (rule.keep[c] < 1.0) rule.discounted[c / 32] |= uint32_t(1) << (c % 32);
   }
   return rule;
 }
@@ -36,10 +39,12 @@ void EvidentialOcTree::updateDiscountsClearings() {
   discounts_clearings_ = config_.clearingsOf(any_movable) > 0;
 }
 
-void EvidentialOcTree::discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments,
+bool EvidentialOcTree::discountClearedLeaf(EvidentialOcTreeNode* leaf, const double* increments,
                                            const ClearingRule& rule, float* values, Edit& edit) {
+  // Most cleared voxels hold no class the rule discounts (by default, no movable class): a look
+  // at the payload's class mask, nothing decoded, stored or released.
+  if (!clearingMayChange(leaf, rule)) return false;
   leafValues(leaf, values);
-  if (!leaf->hasSemantics()) return;
   const float prior = rule_->prior();
   double largest = 0.0;  // of the row as it is added: without movable classes
   for (int c = 0; increments && c < num_classes_; ++c)
@@ -49,18 +54,17 @@ void EvidentialOcTree::discountClearedLeaf(EvidentialOcTreeNode* leaf, const dou
   for (int c = 0; c < num_classes_; ++c) {
     const bool shown =
         !rule.movable[c] && largest > 0.0 && increments[c] >= kShownShare * largest;
-    if (!shown && values[c] != prior) {
+    if (!shown && rule.keep[c] < 1.0 && values[c] != prior) {
       const float kept = prior + float(rule.keep[c] * (double(values[c]) - prior));
       changed |= kept != values[c];
       values[c] = kept;
     }
     left += double(values[c]) - prior;
   }
+  if (!changed) return true;  // what it holds, the scan still shows
   if (left >= SemanticConfig::kReleasedEvidence) {
-    // Most cleared voxels hold no movable class and only those are discounted by default:
-    // nothing to store.
-    if (changed) storeLeafValues(leaf, values, edit);
-    return;
+    storeLeafValues(leaf, values, edit);
+    return true;
   }
   std::fill_n(values, num_classes_, prior);
   if (config_.semantic_occupied_only) {
@@ -71,6 +75,12 @@ void EvidentialOcTree::discountClearedLeaf(EvidentialOcTreeNode* leaf, const dou
   } else {
     releaseLeafPayload(leaf, edit);
   }
+  return true;
+}
+
+bool EvidentialOcTree::clearingMayChange(const EvidentialOcTreeNode* node,
+                                         const ClearingRule& rule) const {
+  return node->hasSemantics() && pool_->holdsAny(node->payload_, rule.discounted.data());
 }
 
 }  // namespace evidential_octomap

@@ -77,6 +77,19 @@ double PayloadStore::sum(uint32_t ref) const {
   return total;
 }
 
+bool PayloadStore::holdsAny(uint32_t ref, const uint32_t* classes) const {
+  const int size_class = sizeClassOf(ref);
+  const float* slot = pools_[size_class]->slot(indexOf(ref));
+  if (isDense(size_class)) {
+    for (int c = 0; c < num_classes_; ++c)
+      if ((classes[c / 32] >> (c % 32) & 1u) && !sameBits(slot[c], prior_)) return true;
+    return false;
+  }
+  for (int w = 0; w < mask_words_; ++w)
+    if (maskWord(slot, w) & classes[w]) return true;
+  return false;
+}
+
 int PayloadStore::encode(const float* values, float* sparse) const {
   float* value = sparse + mask_words_;
   for (int w = 0; w < mask_words_; ++w) {

@@ -37,6 +37,9 @@ class PayloadStore {
   void decode(uint32_t ref, float* out) const;
   // Sum of the C values in class order (what std::accumulate over the decoded values gives).
   double sum(uint32_t ref) const;
+  // Whether `ref` holds a value other than the prior for a class of `classes` (bit c % 32 of
+  // word c / 32): a look at the class mask, without decoding.
+  bool holdsAny(uint32_t ref, const uint32_t* classes) const;
 
   // Payloads stored.
   size_t inUse() const;
