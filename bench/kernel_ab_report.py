@@ -16,7 +16,9 @@ from collections import defaultdict
 
 LABELS = {"plain": "plain `OcTree::insertPointCloud`",
           "exact": "exact (library defaults)",
-          "live": "live launch settings"}
+          "exact_no_clearing": "exact, movable clearing off",
+          "live": "live launch settings",
+          "live_no_clearing": "live, movable clearing off"}
 SEQUENCES = [("revisit", "bundled SemanticKITTI scans forth and back, 30 inserts",
               (0, 10), (10, 30)),
              ("offroad", "SYNTHETIC off-road sequence (os1-64 forest, 40 scans, each once)",
@@ -75,7 +77,7 @@ def main():
             if not os.path.exists(path):
                 continue
             rows = read(path)
-            for method in ("plain", "exact", "live"):
+            for method in LABELS:
                 if method not in rows:
                     continue
                 stages = " / ".join(f"{median(rows, method, f, steady):.1f}" for f in

@@ -2,13 +2,14 @@
 # The kernel's cost before and after a change: plain OctoMap, the exact insert (library
 # defaults) and the live launch's settings, interleaved in one process, for two builds of
 # evidential_sequence_bench run one after the other, on the bundled scans forth and back
-# (revisit, 30 inserts: first pass 0-9, steady state 10-29) and on a SYNTHETIC generated
+# (revisit, 30 inserts: first pass 0-9, steady state 10-29; each also with the movable clearing
+# off) and on a SYNTHETIC generated
 # off-road sequence (os1-64 forest, 40 scans, each once: first 10, then 10-39), how the two
 # builds' maps differ (evidential_map_diff), the perf profile of each (scripts/bench_profile.sh);
 # CSV files and meta.txt (commits, load average, commands) into OUT, then the record
 # docs/experiments/RECORD.md (default kernel_one_hot, titled TITLE) with bench/kernel_ab_report.py.
 #
-#   scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT [RECORD [TITLE [NOTE]]]   # ~20 min at load 13
+#   scripts/bench_kernel_ab.sh BEFORE_BIN AFTER_BIN OUT [RECORD [TITLE [NOTE]]]   # ~30 min
 # Outside CI; CLI (for generating the sequence): EVIDENTIAL_OCTOMAP_CLI or build/core's.
 set -euo pipefail
 
@@ -46,11 +47,13 @@ fi
 kitti=(--data data/semantickitti_08_first10 --classes config/classes_semantickitti.yaml
        --order revisit --scans 10 --steps 30)
 forest=(--data "${offroad}" --classes "${offroad}/classes.yaml" --order forward)
+# What the default clearing of movable classes costs, in the same runs (both builds have them).
+methods=(--methods plain,exact,exact_no_clearing,live,live_no_clearing)
 for which in before after; do
   bin="${before}"
   [[ "${which}" == after ]] && bin="${after}"
-  run "revisit_${which}" "${bin}" "${kitti[@]}"
-  run "offroad_${which}" "${bin}" "${forest[@]}"
+  run "revisit_${which}" "${bin}" "${kitti[@]}" "${methods[@]}"
+  run "offroad_${which}" "${bin}" "${forest[@]}" "${methods[@]}"
 done
 # The maps of both builds after the 30 inserts, leaf by leaf (evidential_map_diff beside AFTER).
 for method in exact live; do
