@@ -188,9 +188,28 @@ def clearing_cost():
                 commit, date))
 
 
+def clearing_speed():
+    text, link, commit, date = record("live_round.md")
+    steady = {}
+    for line in text.split("\n"):
+        r = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(r) == 7 and r[0] == "after":
+            steady.setdefault(r[1], []).append(r[3])  # the revisit's, then the off-road's
+    try:
+        on, off = steady["exact (library defaults)"], steady["exact, movable clearing off"]
+        live_on, live_off = steady["live launch settings"], steady["live, movable clearing off"]
+    except KeyError:
+        raise MissingFigure("live_round.md: no after rows with and without the clearing")
+    return ("Steady-state CPU with / without it, as a share of plain OctoMap's: exact %s× / "
+            "%s× (bundled scans revisited), %s× / %s× (generated off-road); live %s× / %s×, "
+            "%s× / %s× (%s, commit %s, %s)." % (
+                on[0], off[0], on[1], off[1], live_on[0], live_off[0], live_on[1], live_off[1],
+                link, commit, date))
+
+
 FIGURES = {f.__name__: f for f in (live_rate, ros2_rate, local_map_memory,
                                    error_model, learned_heldout, speed, cutoff, merge_equality,
-                                   data_presets, ghosts, clearing_cost)}
+                                   data_presets, ghosts, clearing_cost, clearing_speed)}
 
 
 def render(text, page):
