@@ -302,6 +302,11 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
     std::vector<uint32_t> discounted;  // the classes with keep < 1, one bit each (32 a word)
   };
   ClearingRule clearingRule() const;
+  // Whether class c is movable with its clearing on (movable_clearing_observations > 0).
+  bool clearsMovable(int c) const {
+    return config_.movable_clearing_observations > 0 && size_t(c) < movable_classes_.size() &&
+           movable_classes_[c];
+  }
   // A clearing observation of a leaf: its payload discounted by the rule, released below
   // kReleasedEvidence (SemanticConfig::clearing_observations); `increments`: this scan's kernel
   // row for the leaf (C values), or nullptr. True when `values` (C floats) got the leaf's values

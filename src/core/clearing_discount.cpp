@@ -27,7 +27,7 @@ EvidentialOcTree::ClearingRule EvidentialOcTree::clearingRule() const {
   for (int c = 0; c < num_classes_; ++c) {
     const bool movable = size_t(c) < movable_classes_.size() && movable_classes_[c];
     rule.keep[c] = InsertSettings::clearingKeep(config_.clearingsOf(movable));
-    rule.movable[c] = movable && config_.movable_clearing_observations > 0;
+    rule.movable[c] = clearsMovable(c);
     if (rule.keep[c] < 1.0) rule.discounted[c / 32] |= uint32_t(1) << (c % 32);
   }
   return rule;

@@ -48,10 +48,8 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, bool free_v
   double sum[kMaxClasses] = {};
   double weight_sum = 0.0, nearest = 0.0;
   float values[kMaxClasses];
-  const bool forget_movable = free_voxel && config_.movable_clearing_observations > 0;
   bool answered[kMaxClasses];
-  for (int c = 0; c < num_classes_; ++c)
-    answered[c] = !(forget_movable && size_t(c) < movable_classes_.size() && movable_classes_[c]);
+  for (int c = 0; c < num_classes_; ++c) answered[c] = !(free_voxel && clearsMovable(c));
   for (int dz = -reach[2]; dz <= reach[2]; ++dz) {
     for (int dy = -reach[1]; dy <= reach[1]; ++dy) {
       for (int dx = -reach[0]; dx <= reach[0]; ++dx) {
