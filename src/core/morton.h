@@ -3,6 +3,7 @@
 // and every subtree is one contiguous run. Private to the core.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -40,6 +41,16 @@ inline uint64_t compactBits3(uint64_t v) {
   v = (v | (v >> 16)) & 0xFFFF;
   return v;
 }
+
+// The Morton index of the voxel x | y << 3 | z << 6 (0..7 each) of an 8x8x8 block.
+constexpr std::array<uint16_t, 512> brickLocalMortonTable() {
+  std::array<uint16_t, 512> table{};
+  const auto spread = [](unsigned v) { return (v & 1) | (v & 2) << 2 | (v & 4) << 4; };
+  for (unsigned i = 0; i < 512; ++i)
+    table[i] = uint16_t(spread(i & 7) | spread(i >> 3 & 7) << 1 | spread(i >> 6) << 2);
+  return table;
+}
+inline constexpr std::array<uint16_t, 512> kBrickLocalMorton = brickLocalMortonTable();
 
 inline octomap::OcTreeKey keyFromMorton(uint64_t code) {
   return octomap::OcTreeKey(static_cast<octomap::key_type>(compactBits3(code)),

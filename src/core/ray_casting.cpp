@@ -71,10 +71,12 @@ Dda voxelDda(const EvidentialOcTree& tree, const octomap::point3d& from,
   return Dda(from, dir, centre, tree.getResolution());
 }
 
-// Calls visit(key) for every key OctoMap's computeRayKeys(origin, end) returns, in the same
-// order: the same DDA with the same float and double arithmetic, step for step, so the voxels
-// are bit-for-bit OctoMap's (test_ray_casting checks it ray by ray). Written out here so that
-// each cell goes straight into the brick set instead of a KeyRay.
+// Calls visit(packed key, VoxelBricks::pack) for every key OctoMap's computeRayKeys(origin,
+// end) returns, in the same order: the same DDA with the same float and double arithmetic, step
+// for step, so the voxels are bit-for-bit OctoMap's (test_ray_casting checks it ray by ray).
+// Written out here so that each cell goes straight into the brick set instead of a KeyRay, with
+// the ray state in registers (the step is a branch per axis rather than an indexed store that
+// the next step must load) and the key one integer that a step adds a constant to.
 template <typename Visit>
 bool traceRay(const EvidentialOcTree& tree, const octomap::point3d& origin,
               const octomap::point3d& end, Visit&& visit) {
@@ -83,18 +85,37 @@ bool traceRay(const EvidentialOcTree& tree, const octomap::point3d& origin,
     return false;
   }
   if (key_origin == key_end) return true;
-  visit(key_origin);
+  uint64_t current = VoxelBricks::pack(key_origin);
+  const uint64_t last = VoxelBricks::pack(key_end);
+  visit(current);
   octomap::point3d direction = (end - origin);
   const float length = (float)direction.norm();
   direction /= length;
-  Dda dda = voxelDda(tree, origin, direction, key_origin);
-  octomap::OcTreeKey current = key_origin;
+  const Dda dda = voxelDda(tree, origin, direction, key_origin);
+  double tx = dda.t_max[0], ty = dda.t_max[1], tz = dda.t_max[2];
+  const double dx = dda.t_delta[0], dy = dda.t_delta[1], dz = dda.t_delta[2];
+  // A step of -1 adds 2^64 - 2^(16 a): the same key in 64-bit wrap-around arithmetic.
+  const uint64_t sx = uint64_t(int64_t(dda.step[0])), sy = uint64_t(int64_t(dda.step[1])) << 16,
+                 sz = uint64_t(int64_t(dda.step[2])) << 32;
   while (true) {
-    const unsigned dim = dda.advance();
-    current[dim] += dda.step[dim];
-    if (current == key_end) return true;
+    if (tx < ty) {
+      if (tx < tz) {
+        current += sx;
+        tx += dx;
+      } else {
+        current += sz;
+        tz += dz;
+      }
+    } else if (ty < tz) {
+      current += sy;
+      ty += dy;
+    } else {
+      current += sz;
+      tz += dz;
+    }
+    if (current == last) return true;
     // Past the end point without reaching its voxel (rounding): OctoMap stops here too.
-    if (dda.exit() > length) return true;
+    if (std::min(std::min(tx, ty), tz) > length) return true;
     visit(current);
   }
 }
@@ -116,9 +137,7 @@ RayEnd rayEnd(const EvidentialOcTree& tree, octomap::point3d end, const octomap:
 void castExact(const EvidentialOcTree& tree, const std::vector<octomap::point3d>& points_W,
                const octomap::point3d& origin_W, double max_range, bool discretize,
                VoxelBricks* bricks) {
-  const auto mark_free = [bricks](const octomap::OcTreeKey& key) {
-    bricks->testAndSet(key, kRayFree);
-  };
+  const auto mark_free = [bricks](uint64_t packed) { bricks->testAndSet(packed, kRayFree); };
 #pragma omp for schedule(dynamic, 512)
   for (size_t i = 0; i < points_W.size(); ++i) {
     // discretize: one ray per end voxel, to its centre (OctoMap's computeDiscreteUpdate).
@@ -332,7 +351,8 @@ void castFast(const EvidentialOcTree& tree, const std::vector<octomap::point3d>&
 bool rayKeys(const EvidentialOcTree& tree, const octomap::point3d& origin,
              const octomap::point3d& end, std::vector<octomap::OcTreeKey>* keys) {
   keys->clear();
-  return traceRay(tree, origin, end, [&](const octomap::OcTreeKey& key) { keys->push_back(key); });
+  return traceRay(tree, origin, end,
+                  [&](uint64_t packed) { keys->push_back(VoxelBricks::unpack(packed)); });
 }
 
 void castRays(const EvidentialOcTree& tree, const std::vector<octomap::point3d>& points_W,

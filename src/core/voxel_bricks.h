@@ -31,10 +31,21 @@ class VoxelBricks {
   size_t capacityBytes() const;
   void releaseExcess();
 
+  // A key as one integer, x | y << 16 | z << 32: a ray steps it by adding a constant, and the
+  // key of its brick is a mask.
+  static uint64_t pack(const octomap::OcTreeKey& key) {
+    return uint64_t(key[0]) | uint64_t(key[1]) << 16 | uint64_t(key[2]) << 32;
+  }
+  static octomap::OcTreeKey unpack(uint64_t packed) {
+    return octomap::OcTreeKey(static_cast<octomap::key_type>(packed),
+                              static_cast<octomap::key_type>(packed >> 16),
+                              static_cast<octomap::key_type>(packed >> 32));
+  }
   // Sets `flag` (0..kFlags-1) of `key`; returns whether it was set before.
-  bool testAndSet(const octomap::OcTreeKey& key, int flag) {
+  bool testAndSet(const octomap::OcTreeKey& key, int flag) { return testAndSet(pack(key), flag); }
+  bool testAndSet(uint64_t packed, int flag) {
     uint64_t* word;
-    const uint64_t bit = locate(key, flag, &word);
+    const uint64_t bit = locate(packed, flag, &word);
     const bool was_set = (*word & bit) != 0;
     *word |= bit;
     return was_set;
@@ -70,21 +81,22 @@ class VoxelBricks {
   static uint64_t brickCode(const octomap::OcTreeKey& key) {
     return spreadBits3(key[2] >> 3) << 2 | spreadBits3(key[1] >> 3) << 1 | spreadBits3(key[0] >> 3);
   }
-  static unsigned localIndex(const octomap::OcTreeKey& key) {
-    static constexpr uint8_t kSpread[8] = {0, 1, 8, 9, 64, 65, 72, 73};  // spreadBits3 of 0..7
-    return kSpread[key[2] & 7] << 2 | kSpread[key[1] & 7] << 1 | kSpread[key[0] & 7];
+  static constexpr uint64_t kBrickMask = 0xFFF8FFF8FFF8ull;  // of a packed key
+  // The local Morton index (0..511) of a packed key in its brick: one table lookup by its low
+  // three bits per axis.
+  static unsigned localIndex(uint64_t packed) {
+    return kBrickLocalMorton[(packed & 7) | (packed >> 13 & 070) | (packed >> 26 & 0700)];
   }
+  static unsigned localIndex(const octomap::OcTreeKey& key) { return localIndex(pack(key)); }
   // The word and bit of (key, flag), creating the brick when missing. Consecutive ray cells
   // mostly stay in one brick, so the brick of the previous call is tried first.
-  uint64_t locate(const octomap::OcTreeKey& key, int flag, uint64_t** word) {
-    const uint64_t coarse =
-        uint64_t(key[0] >> 3) | uint64_t(key[1] >> 3) << 16 | uint64_t(key[2] >> 3) << 32;
-    if (coarse != last_coarse_) {
-      last_coarse_ = coarse;
-      last_brick_ = findOrAdd(brickCode(key));
+  uint64_t locate(uint64_t packed, int flag, uint64_t** word) {
+    if ((packed & kBrickMask) != last_coarse_) {
+      last_coarse_ = packed & kBrickMask;
+      last_bits_ = bricks_[findOrAdd(brickCode(unpack(packed)))].bits[0];
     }
-    const unsigned index = localIndex(key);
-    *word = &bricks_[last_brick_].bits[flag][index >> 6];
+    const unsigned index = localIndex(packed);
+    *word = &last_bits_[flag * 8 + (index >> 6)];
     return uint64_t(1) << (index & 63);
   }
   uint32_t findOrAdd(uint64_t code);
@@ -96,8 +108,8 @@ class VoxelBricks {
   std::vector<Brick> bricks_;
   std::vector<uint32_t> slots_;  // open addressing: brick index or kEmptySlot
   int shift_ = 64;
-  uint64_t last_coarse_ = ~0ull;  // key >> 3 of the brick found last, packed
-  uint32_t last_brick_ = 0;
+  uint64_t last_coarse_ = ~0ull;  // the packed key & kBrickMask of the brick found last
+  uint64_t* last_bits_ = nullptr;  // its bits (findOrAdd may move the bricks: set after it)
   std::vector<std::pair<uint64_t, uint32_t>> sorted_;  // (code, brick) after sortBricks()
 };
 
