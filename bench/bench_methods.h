@@ -150,13 +150,13 @@ inline std::unique_ptr<Method> semanticMethod(double range, int threads, bool fa
   return m;
 }
 
-// The live launch's settings (config/mapping_live.yaml): fast free space, kernel length 0.2 m,
-// count cap ds_multiplier 2, evidence floor 0.01, semantic evidence on the surface only.
+// The live launch's settings (config/mapping_live.yaml): kernel length 0.2 m, count cap
+// ds_multiplier 2, evidence floor 0.01, semantic evidence on the surface only.
 inline std::unique_ptr<Method> liveMethod(double range, bool learned) {
-  auto m = semanticMethod(range, 2, true, "dempster", learned);
+  auto m = semanticMethod(range, 2, false, "dempster", learned);
   m->label = std::string(
-                 "live launch settings (fast free space, length_scale 0.2, ds_multiplier 2, "
-                 "evidence_floor 0.01, semantic_occupied_only)") +
+                 "live launch settings (length_scale 0.2, ds_multiplier 2, evidence_floor 0.01, "
+                 "semantic_occupied_only)") +
              (learned ? ", learned (cross-fitted) evidence" : "");
   m->key = std::string("live") + (learned ? "_learned" : "");
   SemanticConfig& config = static_cast<SemanticMethod&>(*m).config;

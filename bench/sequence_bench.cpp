@@ -8,7 +8,7 @@
 //   evidential_sequence_bench --data out/long --classes out/long/classes.yaml --order forward
 //   evidential_sequence_bench ... --only exact   # one method alone: its RSS after every step
 //   evidential_sequence_bench ... --methods plain,exact,occupied_only
-//   evidential_sequence_bench ... --methods plain,live,live_full_rays
+//   evidential_sequence_bench ... --methods plain,live,live_fast_free_space
 //   evidential_sequence_bench ... --methods plain,exact,exact_no_clearing,live,live_no_clearing
 //   evidential_sequence_bench ... --only local --radius 60 --tile-dir out/tiles --save out/g.ot
 //     (local: the exact insert in a LocalMap; --save writes the method's whole map at the end,
@@ -98,12 +98,12 @@ std::unique_ptr<evbench::Method> liveVolumeMethod(double range) {
   return m;
 }
 
-// The live launch's settings with every ray cast in full (fast_free_space off).
-std::unique_ptr<evbench::Method> liveFullRaysMethod(double range) {
+// The live launch's settings with the rays' shortcut through cleared space (fast_free_space).
+std::unique_ptr<evbench::Method> liveFastFreeSpaceMethod(double range) {
   auto m = evbench::liveMethod(range, false);
-  m->key = "live_full_rays";
-  m->label = "live launch settings without fast_free_space";
-  static_cast<evbench::SemanticMethod&>(*m).config.fast_free_space = false;
+  m->key = "live_fast_free_space";
+  m->label = "live launch settings with fast_free_space";
+  static_cast<evbench::SemanticMethod&>(*m).config.fast_free_space = true;
   return m;
 }
 
@@ -177,12 +177,12 @@ std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
       out.push_back(occupiedOnlyMethod(o.range));
     else if (key == "live_volume")
       out.push_back(liveVolumeMethod(o.range));
-    else if (key == "live_full_rays")
-      out.push_back(liveFullRaysMethod(o.range));
+    else if (key == "live_fast_free_space")
+      out.push_back(liveFastFreeSpaceMethod(o.range));
     else if (key == "local")
       out.push_back(localMethod(o));
     else
-      throw std::invalid_argument("methods are plain, exact, live, live_full_rays, occupied_only, live_volume, local: " + key);
+      throw std::invalid_argument("methods are plain, exact, live, live_fast_free_space, occupied_only, live_volume, local: " + key);
   }
   return out;
 }

@@ -185,7 +185,7 @@ SemanticConfig liveProfile() {
     const Setting* setting = findSetting(name);
     EXPECT_TRUE(setting && setting->parse(value, &config)) << line;
   }
-  EXPECT_TRUE(config.fast_free_space && config.semantic_occupied_only);
+  EXPECT_TRUE(config.semantic_occupied_only);
   return config;
 }
 

@@ -123,8 +123,9 @@ std::vector<Setting> makeList() {
           "elsewhere are answered from them (about half the insert CPU; not exact)"),
     // --- how an insert runs (never stored) ---
     Entry("fast_free_space", &InsertSettings::fast_free_space, kInsert,
-          "Fast free space for live use: rays take a shortcut through space this scan already "
-          "cleared, except where the map holds an occupied voxel or semantics (not exact)"),
+          "Rays take a shortcut through space this scan already cleared, except where the map "
+          "holds an occupied voxel or semantics (not exact; costs more than full rays once the "
+          "map knows the area)"),
     Entry("evidence_floor", &InsertSettings::evidence_floor, kInsert,
           "Point evidence below this counts as 0 (0: off; 0.01 makes learned evidence about as "
           "cheap as one-hot)")

@@ -31,7 +31,7 @@ class LaunchConfigTest(unittest.TestCase):
         text = rospy.get_param(NODE + "/settings_report")  # what the node logged at start-up
         self.assertTrue(text.startswith("settings profile: live"), text)
         for part in ("length_scale 0.35", "ds_multiplier 3", "evidence_floor 0.02",
-                     "fast_free_space false"):
+                     "fast_free_space true"):
             self.assertIn(part, text)
 
 if __name__ == "__main__":
