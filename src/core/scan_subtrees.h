@@ -39,7 +39,7 @@ class ScanSubtrees : public SubtreeSource {
     size_t first_brick, last_brick;  // in rays->sorted bricks
     size_t first_point, last_point;  // in point_subtrees_
   };
-  struct PerThread {
+  struct alignas(64) PerThread {  // cache lines of its own, as VoxelBricks
     KernelRows kernel;
     std::vector<std::pair<uint32_t, uint32_t>> order;  // (local Morton code, row)
     std::vector<std::pair<uint32_t, uint32_t>> order_buffer;
