@@ -419,6 +419,8 @@ void KernelPass::scatterWith(const Contribution& contribute, const KernelPoint& 
 struct MemberTerms {
   const double* axis[3];  // indexed by the offset from the group's first point
   double syz;             // its y + z term on the line at hand
+  double x;               // its x, from the centre of the group's first voxel [voxels]
+  double length;          // its support across, L [voxels]
 };
 
 void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::OcTreeKey& base,
@@ -439,13 +441,16 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
     hi[a] = std::min(hi[a], int(base[a]) + kSize - 1 - int(ref[a]));
     if (lo[a] > hi[a]) return;
   }
-  const double half = tree_.getResolution() / 2.0;
+  const double resolution = tree_.getResolution(), half = resolution / 2.0;
   const int stride = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}) + 1;
   out->axis_terms.resize(size_t(3) * stride * n);
   MemberTerms terms[kMaxGroup];
+  const double ref_x = static_cast<float>(tree_.keyToCoord(ref[0]));
   for (int i = 0; i < n; ++i) {
     const KernelPoint& point = *group[i].point;
     MemberTerms& t = terms[i];
+    t.x = (double((*group[i].position)(0)) - ref_x) / resolution;
+    t.length = 1.0 / (std::sqrt(point.inv_length2) * resolution);
     for (int a = 0; a < 3; ++a) {
       double* axis = &out->axis_terms[(size_t(i) * 3 + a) * stride] - lo[a];
       t.axis[a] = axis;
@@ -489,20 +494,31 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
       const uint32_t line = uint32_t((z0 + oz) << kSubtreeLevels | (y0 + oy));
       const uint64_t kept = (out->masked ? out->mask[line] : ~uint64_t(0)) & reachable;
       if (!kept) continue;
-      // The members whose support crosses this line; every kept voxel of the group's reach on
-      // it is summed over them without a branch (its table gives 0 beyond a support), which
-      // costs less than finding each member's interval on each line.
+      // The members whose support crosses this line, and the x offsets within one of them:
+      // |x - o| < L sqrt(1 - syz) (+ half a voxel to the cube), widened by a hundredth of a
+      // voxel for rounding. Each kept voxel there is summed over the members without a branch
+      // (a member's table gives 0 beyond its support, so the sums are those of the whole line).
       int members = 0;
+      double first = hi[0] + 1.0, last = lo[0] - 1.0;
       for (int i = 0; i < n; ++i) {
         MemberTerms& t = terms[i];
         t.syz = t.axis[2][oz] + t.axis[1][oy];
-        if (t.syz < 1.0) on_line[members++] = i;
+        if (!(t.syz < 1.0)) continue;
+        on_line[members++] = i;
+        const double across = t.length * std::sqrt(1.0 - t.syz) + (to_cube_ ? 0.5 : 0.0) + 0.01;
+        first = std::min(first, t.x - across);
+        last = std::max(last, t.x + across);
       }
       if (!members) continue;
+      const int a = std::max(lo[0], int(std::ceil(first))), b = std::min(hi[0], int(std::floor(last)));
+      if (a > b) continue;
+      const int width_x = b - a + 1;
+      const uint64_t inside = (width_x >= 64 ? ~uint64_t(0) : (uint64_t(1) << width_x) - 1)
+                              << (x0 + a);
       const uint64_t weaker_line = own_class ? out->weaker_lines[line] : 0;
       double* class_sums = &out->class_sums[size_t(line) << kSubtreeLevels];
       uint64_t summed = 0;  // the voxels this group adds to
-      for (uint64_t voxels = kept; voxels; voxels &= voxels - 1) {
+      for (uint64_t voxels = kept & inside; voxels; voxels &= voxels - 1) {
         const int x = __builtin_ctzll(voxels);
         const OneHotTable::Step* steps = full_steps;
         if ((weaker_line >> x & 1) &&
