@@ -95,10 +95,10 @@ class alignas(64) VoxelBricks {
   uint64_t locate(uint64_t packed, int flag, uint64_t** word) {
     if ((packed & kBrickMask) != last_coarse_) {
       last_coarse_ = packed & kBrickMask;
-      last_bits_ = bricks_[findOrAdd(brickCode(unpack(packed)))].bits[0];
+      last_brick_ = &bricks_[findOrAdd(brickCode(unpack(packed)))];
     }
     const unsigned index = localIndex(packed);
-    *word = &last_bits_[flag * 8 + (index >> 6)];
+    *word = &last_brick_->bits[flag][index >> 6];
     return uint64_t(1) << (index & 63);
   }
   uint32_t findOrAdd(uint64_t code);
@@ -111,7 +111,7 @@ class alignas(64) VoxelBricks {
   std::vector<uint32_t> slots_;  // open addressing: brick index or kEmptySlot
   int shift_ = 64;
   uint64_t last_coarse_ = ~0ull;  // the packed key & kBrickMask of the brick found last
-  uint64_t* last_bits_ = nullptr;  // its bits (findOrAdd may move the bricks: set after it)
+  Brick* last_brick_ = nullptr;    // that brick (findOrAdd may move the bricks: set after it)
   std::vector<std::pair<uint64_t, uint32_t>> sorted_;  // (code, brick) after sortBricks()
 };
 
