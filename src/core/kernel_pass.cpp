@@ -510,7 +510,8 @@ void KernelPass::scatterOneHot(const KernelMember* group, int n, const octomap::
         last = std::max(last, t.x + across);
       }
       if (!members) continue;
-      const int a = std::max(lo[0], int(std::ceil(first))), b = std::min(hi[0], int(std::floor(last)));
+      const int a = std::max(lo[0], int(std::ceil(first)));
+      const int b = std::min(hi[0], int(std::floor(last)));
       if (a > b) continue;
       const int width_x = b - a + 1;
       const uint64_t inside = (width_x >= 64 ? ~uint64_t(0) : (uint64_t(1) << width_x) - 1)

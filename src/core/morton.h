@@ -13,7 +13,7 @@
 namespace evidential_octomap {
 
 // The 16 bits of v spread to every third bit.
-inline uint64_t spreadBits3(uint64_t v) {
+constexpr uint64_t spreadBits3(uint64_t v) {
   v &= 0xFFFF;
   v = (v | (v << 16)) & 0x0000FF0000FFull;
   v = (v | (v << 8)) & 0x00F00F00F00Full;
@@ -45,9 +45,9 @@ inline uint64_t compactBits3(uint64_t v) {
 // The Morton index of the voxel x | y << 3 | z << 6 (0..7 each) of an 8x8x8 block.
 constexpr std::array<uint16_t, 512> brickLocalMortonTable() {
   std::array<uint16_t, 512> table{};
-  const auto spread = [](unsigned v) { return (v & 1) | (v & 2) << 2 | (v & 4) << 4; };
   for (unsigned i = 0; i < 512; ++i)
-    table[i] = uint16_t(spread(i & 7) | spread(i >> 3 & 7) << 1 | spread(i >> 6) << 2);
+    table[i] = uint16_t(spreadBits3(i & 7) | spreadBits3(i >> 3 & 7) << 1 |
+                        spreadBits3(i >> 6) << 2);
   return table;
 }
 inline constexpr std::array<uint16_t, 512> kBrickLocalMorton = brickLocalMortonTable();
