@@ -1,7 +1,7 @@
 // evidential_sequence_bench: CPU and wall time of every insert over a long or revisiting
 // sequence, scan by scan, for plain OctoMap, the exact semantic insert (library defaults) and
-// the live launch's settings, interleaved in one process (the order rotated each step) so a
-// change of the shared machine's load hits them alike. Writes one CSV row per (step, method);
+// the live launch's settings, interleaved in one process (plain first, the others' order
+// rotated each step) so a change of the shared machine's load hits them alike. Writes one CSV row per (step, method);
 // bench/sequence_report.py turns the rows into the tables and the per-scan plot.
 //
 //   evidential_sequence_bench --data DIR --classes YAML --order revisit --scans 10 --steps 60
@@ -10,6 +10,7 @@
 //   evidential_sequence_bench ... --methods plain,exact,occupied_only
 //   evidential_sequence_bench ... --methods plain,live,live_fast_free_space
 //   evidential_sequence_bench ... --methods plain,exact,exact_no_clearing,live,live_no_clearing
+//   evidential_sequence_bench ... --methods plain,live,live:ds_multiplier=1:length_scale=0.15
 //   evidential_sequence_bench ... --only local --radius 60 --tile-dir out/tiles --save out/g.ot
 //     (local: the exact insert in a LocalMap; --save writes the method's whole map at the end,
 //      for exact the map, for local the global map merged from the tiles, both fully pruned)
@@ -19,8 +20,10 @@
 #include <evidential_octomap/evidential_octree.h>
 #include <evidential_octomap/io.h>
 #include <evidential_octomap/local_map.h>
+#include <evidential_octomap/settings.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -157,6 +160,27 @@ void saveWholeMap(evbench::Method& m, const std::string& path) {
   evidential_octomap::saveMap(*map, path);
 }
 
+// A method's settings changed: `spec` is its key, then `:name=value` per setting of the core's
+// list (as the CLI's compare variants), e.g. live:ds_multiplier=1:length_scale=0.15.
+std::unique_ptr<evbench::Method> withSettings(std::unique_ptr<evbench::Method> m,
+                                              const std::string& spec) {
+  auto& config = static_cast<evbench::SemanticMethod&>(*m).config;
+  std::stringstream in(spec.substr(spec.find(':') + 1));
+  std::string item;
+  while (std::getline(in, item, ':')) {
+    const size_t eq = item.find('=');
+    const evidential_octomap::Setting* setting =
+        evidential_octomap::findSetting(item.substr(0, eq));
+    if (eq == std::string::npos || !setting || !setting->parse(item.substr(eq + 1), &config))
+      throw std::invalid_argument("not a setting=value: " + item + " (in " + spec + ")");
+  }
+  const std::string problem = config.problem();
+  if (!problem.empty()) throw std::invalid_argument(spec + ": " + problem);
+  m->key = spec;
+  m->label += " with " + spec.substr(spec.find(':') + 1);
+  return m;
+}
+
 // The methods named in `list` (comma-separated keys), in that order.
 std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
   std::vector<std::unique_ptr<evbench::Method>> out;
@@ -181,10 +205,31 @@ std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
       out.push_back(liveFastFreeSpaceMethod(o.range));
     else if (key == "local")
       out.push_back(localMethod(o));
+    else if (key.rfind("live:", 0) == 0)
+      out.push_back(withSettings(evbench::liveMethod(o.range, false), key));
+    else if (key.rfind("exact:", 0) == 0)
+      out.push_back(withSettings(evbench::semanticMethod(o.range, 2, false, "dempster"), key));
     else
-      throw std::invalid_argument("methods are plain, exact, live, live_fast_free_space, occupied_only, live_volume, local: " + key);
+      throw std::invalid_argument("methods are plain, exact, live, live_fast_free_space, "
+                                  "occupied_only, live_volume, local, live:SETTING=VALUE..., "
+                                  "exact:SETTING=VALUE...: " + key);
   }
   return out;
+}
+
+// Which method takes turn k of step i: plain OctoMap first, the others rotated behind it. Its
+// hash set of every ray cell leaves the caches cold, so the method right after it pays for
+// that (about 4 % of the exact insert, 15 % of the live one); rotated, every other method
+// follows it equally often, and the median over the steps is of turns that do not.
+size_t turn(size_t k, size_t step, const std::vector<std::unique_ptr<evbench::Method>>& methods) {
+  const size_t n = methods.size();
+  const size_t plain = std::find_if(methods.begin(), methods.end(),
+                                    [](const auto& m) { return m->key == "plain"; }) -
+                       methods.begin();
+  if (plain == n) return (k + step) % n;  // no plain OctoMap: all rotated
+  if (k == 0) return plain;
+  const size_t other = (k - 1 + step) % (n - 1);  // among the n - 1 others
+  return other < plain ? other : other + 1;
 }
 
 // Scans by index: the revisit keeps its few distinct scans, a forward run loads each once.
@@ -226,19 +271,19 @@ int main(int argc, char** argv) try {
   std::ofstream csv(o.csv);
   if (!csv) throw std::runtime_error("cannot write " + o.csv);
   csv << "step,scan,method,cpu_ms,wall_ms,cpu_ms_rays,cpu_ms_kernel,cpu_ms_update,rss_mb,"
-         "peak_rss_mb\n";
+         "peak_rss_mb,wall_ms_rays,wall_ms_kernel,wall_ms_update\n";
   const auto& order = source.order();
   for (size_t i = 0; i < order.size(); ++i) {
     const evbench::Scan scan = source.get(order[i]);
     const std::vector<float> evidence = evbench::derivedEvidence(scan.classes, C);
     for (size_t k = 0; k < methods.size(); ++k) {
-      evbench::Method& m = *methods[(k + i) % methods.size()];
+      evbench::Method& m = *methods[turn(k, i, methods)];
       m.step(i, scan, evidence);
       const auto& s = m.stats[i].back();
       csv << i << "," << order[i] << "," << m.key << "," << m.cpu[i].back() << ","
           << m.wall[i].back() << "," << s.cpu_ms_occupancy << "," << s.cpu_ms_kernel << ","
           << s.cpu_ms_update << "," << evbench::currentRssMb() << "," << evbench::peakRssMb()
-          << "\n";
+          << "," << s.ms_occupancy << "," << s.ms_kernel << "," << s.ms_update << "\n";
     }
     csv.flush();
     if (i % 10 == 0) std::cerr << "  step " << i << " / " << order.size() << std::endl;
