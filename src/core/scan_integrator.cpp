@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -22,15 +24,28 @@
 namespace evidential_octomap {
 namespace {
 
+// What checkEvidence accepts (finite and >= 0, -0 included), read from the bits.
+bool validEvidence(float e) {
+  uint32_t bits;
+  std::memcpy(&bits, &e, sizeof(bits));
+  return bits < 0x7F800000u || bits == 0x80000000u;
+}
+
 // Validates everything before the map is touched: a bad message changes nothing.
 void validateInput(const octomap::Pointcloud& points_W, const std::vector<float>& evidence,
-                   int num_classes) {
+                   int num_classes, int threads) {
   const size_t n = points_W.size();
   if (evidence.size() != n * size_t(num_classes)) {
     throw std::invalid_argument("evidence has " + std::to_string(evidence.size()) +
                                 " values, expected points x classes = " + std::to_string(n) +
                                 " x " + std::to_string(num_classes));
   }
+  // One pass without a branch per value; which point and why only when one is not valid.
+  int valid = 1;
+  const size_t values = evidence.size();
+#pragma omp parallel for num_threads(threads) schedule(static) reduction(& : valid)
+  for (size_t i = 0; i < values; ++i) valid &= int(validEvidence(evidence[i]));
+  if (valid) return;
   for (size_t i = 0; i < n; ++i) {
     const std::string problem = checkEvidence(&evidence[i * num_classes], num_classes);
     if (!problem.empty()) {
@@ -46,6 +61,7 @@ void validateInput(const octomap::Pointcloud& points_W, const std::vector<float>
 // need is released after it (kept_buffers.h): 53.5 MB stay for the bundled 123k-point scans
 // at C = 20 and 2 threads, 20 MB of it the threads' kernel rows of their largest subtree.
 struct ScanIntegrator::Scratch {
+  std::vector<uint8_t> fate;                 // per input point: skipped, beyond range, kept
   std::vector<octomap::point3d> ray_points;  // every point inside the key range
   std::vector<VoxelBricks> bricks;           // ray casting, one per thread
   RawPoints raw;                             // points that may give semantic evidence
@@ -60,8 +76,9 @@ struct ScanIntegrator::Scratch {
 };
 
 size_t ScanIntegrator::Scratch::bytes() const {
-  size_t total = vectorBytes(ray_points) + vectorBytes(bricks) + vectorBytes(raw.positions) +
-                 vectorBytes(raw.evidence) + vectorBytes(semantic.uncertainty) +
+  size_t total = vectorBytes(fate) + vectorBytes(ray_points) + vectorBytes(bricks) +
+                 vectorBytes(raw.positions) + vectorBytes(raw.evidence) +
+                 vectorBytes(semantic.uncertainty) +
                  vectorBytes(semantic.cells) + vectorBytes(semantic.buffer) +
                  vectorBytes(semantic.runs) + vectorBytes(points.positions) +
                  vectorBytes(points.evidence) + vectorBytes(points.own) +
@@ -71,6 +88,7 @@ size_t ScanIntegrator::Scratch::bytes() const {
 }
 
 void ScanIntegrator::Scratch::releaseExcess() {
+  releaseOversized(&fate, fate.size());
   releaseOversized(&ray_points, ray_points.size());
   for (VoxelBricks& b : bricks) b.releaseExcess();
   releaseOversized(&raw.positions, raw.positions.size());
@@ -105,7 +123,7 @@ SubtreeSource* ScanIntegrator::prepare(const octomap::Pointcloud& points_W,
   const int num_classes = tree.numClasses();
   const size_t n = points_W.size();
   stats->points_in = n;
-  validateInput(points_W, evidence, num_classes);
+  validateInput(points_W, evidence, num_classes, threads());
   // A kernel the machine cannot afford is refused rather than left to run for hours or to
   // exhaust memory (SemanticConfig::kMaxSupportLeaves).
   const std::string support_problem = config_.supportProblem(tree.getResolution());
@@ -123,15 +141,27 @@ SubtreeSource* ScanIntegrator::prepare(const octomap::Pointcloud& points_W,
   RawPoints& raw = scratch.raw;
   cloud.clear();
   raw.clear();
-  octomap::OcTreeKey key;
+  // Each point's fate in parallel, then the kept ones in input order.
+  enum Fate : uint8_t { kSkipped, kBeyondRange, kSemantic };
+  std::vector<uint8_t>& fate = scratch.fate;
+  fate.resize(n);
+#pragma omp parallel for num_threads(threads) schedule(static)
   for (size_t i = 0; i < n; ++i) {
     const octomap::point3d& p = points_W.getPoint(i);
-    if (!safeCoordToKey(tree, p, &key)) {  // NaN, inf or beyond the map
+    octomap::OcTreeKey key;
+    fate[i] = !safeCoordToKey(tree, p, &key) ? kSkipped  // NaN, inf or beyond the map
+              : config_.max_range > 0.0 && (p - origin_W).norm() > config_.max_range
+                  ? kBeyondRange
+                  : kSemantic;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    if (fate[i] == kSkipped) {
       ++stats->points_skipped;
       continue;
     }
+    const octomap::point3d& p = points_W.getPoint(i);
     cloud.push_back(p);
-    if (config_.max_range > 0.0 && (p - origin_W).norm() > config_.max_range) {
+    if (fate[i] == kBeyondRange) {
       ++stats->points_beyond_range;
       continue;
     }
