@@ -1,8 +1,9 @@
 // evidential_sequence_bench: CPU and wall time of every insert over a long or revisiting
 // sequence, scan by scan, for plain OctoMap, the exact semantic insert (library defaults) and
 // the live launch's settings, interleaved in one process (plain first, the others' order
-// rotated each step) so a change of the shared machine's load hits them alike. Writes one CSV row per (step, method);
-// bench/sequence_report.py turns the rows into the tables and the per-scan plot.
+// shuffled each step) so a change of the shared machine's load hits them alike. Writes one CSV
+// row per (step, method); bench/sequence_report.py turns the rows into the tables and the
+// per-scan plot.
 //
 //   evidential_sequence_bench --data DIR --classes YAML --order revisit --scans 10 --steps 60
 //   evidential_sequence_bench --data out/long --classes out/long/classes.yaml --order forward
@@ -29,6 +30,7 @@
 #include <functional>
 #include <iostream>
 #include <map>
+#include <random>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -217,19 +219,19 @@ std::vector<std::unique_ptr<evbench::Method>> methodsOf(const Options& o) {
   return out;
 }
 
-// Which method takes turn k of step i: plain OctoMap first, the others rotated behind it. Its
-// hash set of every ray cell leaves the caches cold, so the method right after it pays for
-// that (about 4 % of the exact insert, 15 % of the live one); rotated, every other method
-// follows it equally often, and the median over the steps is of turns that do not.
-size_t turn(size_t k, size_t step, const std::vector<std::unique_ptr<evbench::Method>>& methods) {
-  const size_t n = methods.size();
-  const size_t plain = std::find_if(methods.begin(), methods.end(),
-                                    [](const auto& m) { return m->key == "plain"; }) -
-                       methods.begin();
-  if (plain == n) return (k + step) % n;  // no plain OctoMap: all rotated
-  if (k == 0) return plain;
-  const size_t other = (k - 1 + step) % (n - 1);  // among the n - 1 others
-  return other < plain ? other : other + 1;
+// The order of the methods' turns at step i: plain OctoMap first, the others shuffled (a
+// fixed seed per step). Plain's hash set of every ray cell leaves the caches cold, and a method
+// also pays for the one before it, so in a fixed order the method right after plain paid about
+// 4 % of the exact insert, 15 % of the live one; shuffled, each follows each equally often.
+std::vector<size_t> turns(size_t step,
+                          const std::vector<std::unique_ptr<evbench::Method>>& methods) {
+  std::vector<size_t> order, others;
+  for (size_t k = 0; k < methods.size(); ++k)
+    (methods[k]->key == "plain" ? order : others).push_back(k);
+  std::mt19937 random(static_cast<uint32_t>(step));
+  std::shuffle(others.begin(), others.end(), random);
+  order.insert(order.end(), others.begin(), others.end());
+  return order;
 }
 
 // Scans by index: the revisit keeps its few distinct scans, a forward run loads each once.
@@ -276,8 +278,8 @@ int main(int argc, char** argv) try {
   for (size_t i = 0; i < order.size(); ++i) {
     const evbench::Scan scan = source.get(order[i]);
     const std::vector<float> evidence = evbench::derivedEvidence(scan.classes, C);
-    for (size_t k = 0; k < methods.size(); ++k) {
-      evbench::Method& m = *methods[turn(k, i, methods)];
+    for (const size_t k : turns(i, methods)) {
+      evbench::Method& m = *methods[k];
       m.step(i, scan, evidence);
       const auto& s = m.stats[i].back();
       csv << i << "," << order[i] << "," << m.key << "," << m.cpu[i].back() << ","
