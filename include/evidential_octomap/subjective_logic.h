@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -32,8 +34,16 @@ Opinion dempsterCombine(const Opinion& m1, const Opinion& m2);
 // [sum_{j!=k} b_j], Bal(a, b) = 1 - |a - b| / (a + b); 0 when one class holds all belief.
 double dissonance(const std::vector<float>& belief);
 
-// Checks one evidence vector: every value finite and >= 0. Returns an empty string when valid,
-// otherwise a message naming the offending class and value.
+// One evidence value is valid when finite and >= 0 (-0 too). Read from its bits: no branch, so a
+// pass over a whole scan's values vectorises.
+inline bool validEvidence(float e) {
+  uint32_t bits;
+  std::memcpy(&bits, &e, sizeof(bits));
+  return bits < 0x7F800000u || bits == 0x80000000u;
+}
+
+// Checks one evidence vector: every value valid. Returns an empty string when valid, otherwise
+// a message naming the offending class and value.
 std::string checkEvidence(const float* evidence, int num_classes);
 
 // The evidence E that a derived input (a hard label, or a confident probability vector) gives its

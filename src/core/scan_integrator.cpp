@@ -4,8 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -23,13 +21,6 @@
 
 namespace evidential_octomap {
 namespace {
-
-// What checkEvidence accepts (finite and >= 0, -0 included), read from the bits.
-bool validEvidence(float e) {
-  uint32_t bits;
-  std::memcpy(&bits, &e, sizeof(bits));
-  return bits < 0x7F800000u || bits == 0x80000000u;
-}
 
 // Validates everything before the map is touched: a bad message changes nothing.
 void validateInput(const octomap::Pointcloud& points_W, const std::vector<float>& evidence,

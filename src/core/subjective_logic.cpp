@@ -58,7 +58,7 @@ Opinion dempsterCombine(const Opinion& m1, const Opinion& m2) {
 std::string checkEvidence(const float* evidence, int num_classes) {
   for (int c = 0; c < num_classes; ++c) {
     const float e = evidence[c];
-    if (!std::isfinite(e) || e < 0.0f) {
+    if (!validEvidence(e)) {
       std::ostringstream msg;
       msg << "evidence of class " << c << " is " << e << " (must be finite and >= 0)";
       return msg.str();
