@@ -94,10 +94,13 @@ int PayloadStore::encode(const float* values, float* sparse) const {
   float* value = sparse + mask_words_;
   for (int w = 0; w < mask_words_; ++w) {
     uint32_t mask = 0;
+    // Without a branch per class (which of them a voxel holds is the data's): every value is
+    // written, and the next one goes over it unless it is kept.
     for (int c = 32 * w; c < std::min(num_classes_, 32 * w + 32); ++c) {
-      if (sameBits(values[c], prior_)) continue;
-      mask |= 1u << (c % 32);
-      std::memcpy(value++, values + c, sizeof(float));
+      const uint32_t keep = !sameBits(values[c], prior_);
+      std::memcpy(value, values + c, sizeof(float));
+      value += keep;
+      mask |= keep << (c % 32);
     }
     std::memcpy(sparse + w, &mask, sizeof(mask));
   }
