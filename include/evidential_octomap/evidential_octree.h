@@ -329,8 +329,8 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
                    EvidentialOcTreeNode* dst, Edit& edit);
   // The child whose payload an inner node summarises (largest sum, first on ties), or nullptr.
   const EvidentialOcTreeNode* richestChild(const EvidentialOcTreeNode* node) const;
-  // Whether `child` holds more evidence than *richest_sum (then raised to its sum).
-  bool isRicher(const EvidentialOcTreeNode* child, double* richest_sum) const;
+  // The sum of a node's payload values, -inf when it has none (never the richest).
+  double evidenceSum(const EvidentialOcTreeNode* node) const;
   // "" when an inner node's log-odds are its children's maximum (what updateInnerNode gives it),
   // else what differs. (Its summary is derived from the children and cannot differ.)
   std::string innerNodeProblem(const EvidentialOcTreeNode* node) const;

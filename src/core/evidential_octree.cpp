@@ -418,20 +418,19 @@ EvidentialOcTreeNode* EvidentialOcTree::leafForUpdate(const octomap::OcTreeKey& 
 
 // --- inner nodes -------------------------------------------------------------------------------
 
-bool EvidentialOcTree::isRicher(const EvidentialOcTreeNode* child, double* richest_sum) const {
-  if (!child->hasSemantics()) return false;
-  const double sum = pool_->sum(child->payload_);
-  if (!(sum > *richest_sum)) return false;  // the first child wins ties
-  *richest_sum = sum;
-  return true;
+double EvidentialOcTree::evidenceSum(const EvidentialOcTreeNode* node) const {
+  return node->hasSemantics() ? pool_->sum(node->payload_) : -std::numeric_limits<double>::infinity();
 }
 
 const EvidentialOcTreeNode* EvidentialOcTree::richestChild(const EvidentialOcTreeNode* node) const {
   const EvidentialOcTreeNode* richest = nullptr;
   double richest_sum = -std::numeric_limits<double>::infinity();
   for (unsigned i = 0; i < 8; ++i) {
-    if (nodeChildExists(node, i) && isRicher(getNodeChild(node, i), &richest_sum)) {
+    if (!nodeChildExists(node, i)) continue;
+    const double sum = evidenceSum(getNodeChild(node, i));
+    if (sum > richest_sum) {  // the first child wins ties
       richest = getNodeChild(node, i);
+      richest_sum = sum;
     }
   }
   return richest;
@@ -457,11 +456,15 @@ void EvidentialOcTree::updateInnerNode(EvidentialOcTreeNode* node, Edit& edit) {
       continue;
     }
     const EvidentialOcTreeNode* child = getNodeChild(node, i);
-    if (child->getLogOdds() > max_log_odds) max_log_odds = child->getLogOdds();
+    // Selections rather than branches where the data decides (which child is richest).
+    max_log_odds = std::max(max_log_odds, child->getLogOdds());
     equal_leaves = equal_leaves && !nodeHasChildren(child) &&
                    child->getValue() == first->getValue() &&
                    child->hasSemantics() == first->hasSemantics();
-    if (isRicher(child, &richest_sum)) richest = child;
+    const double sum = evidenceSum(child);
+    const bool richer = sum > richest_sum;  // the first child wins ties
+    richest = richer ? child : richest;
+    richest_sum = richer ? sum : richest_sum;
   }
   if (equal_leaves && equalChildPayloads(node)) {
     collapseChildren(node, edit);
