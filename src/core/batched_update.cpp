@@ -333,7 +333,10 @@ size_t EvidentialOcTree::applyLeafUpdates(EvidentialOcTreeNode* node, const Voxe
 size_t EvidentialOcTree::updateLeaf(EvidentialOcTreeNode* leaf, const VoxelUpdate& update,
                                     const UpdateBatch& batch, Edit& edit) {
   if (update.occupancy != 0) {
-    updateNodeLogOdds(leaf, update.occupancy > 0 ? prob_hit_log : prob_miss_log);
+    // OctoMap's updateNodeLogOdds (add, then clamp), with the clamp as min and max instead of
+    // branches: whether a voxel is at a clamp is the data's.
+    const float added = leaf->getLogOdds() + (update.occupancy > 0 ? prob_hit_log : prob_miss_log);
+    leaf->setLogOdds(std::min(std::max(added, clamping_thres_min), clamping_thres_max));
   }
   // A surface that a ray grazes stays occupied and keeps its class; a voxel the clearings freed
   // (a mover has gone) forgets it.
