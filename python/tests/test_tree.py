@@ -76,6 +76,15 @@ def test_leaves_agree_with_queries_at_their_centres():
     assert (occupied.occupancy > 0.5).all() and len(occupied.sizes) < len(leaves.sizes)
 
 
+def test_leaves_without_opinions_give_the_same_geometry_and_occupancy():
+    tree, _ = wall_tree()
+    every, bare = tree.leaves(), tree.leaves(opinions=False)
+    np.testing.assert_array_equal(bare.centers, every.centers)
+    np.testing.assert_array_equal(bare.sizes, every.sizes)
+    np.testing.assert_array_equal(bare.occupancy, every.occupancy)
+    assert len(bare.labels) == len(bare.error_probability) == 0 and bare.belief.shape == (0, 3)
+
+
 def test_pose_input_equals_points_transformed_by_numpy():
     points_S, evidence = wall()
     yaw = 0.3
