@@ -18,7 +18,7 @@ for interfaces in ("tf2_msgs", "evidential_octomap_msgs"):
                         f"./python/ros2_interfaces/{interfaces}")
 
 import evidential_octomap as eo  # noqa: E402
-from evidential_octomap.ros2.node import LATCHED, MARKER_TOPICS  # noqa: E402
+from evidential_octomap.ros2.node import LATCHED, MARKER_TOPICS, MappingNode  # noqa: E402
 from nav_msgs.msg import OccupancyGrid  # noqa: E402
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue  # noqa: E402
 from rcl_interfaces.srv import SetParameters  # noqa: E402
@@ -299,6 +299,19 @@ def test_the_console_script_refuses_a_bad_parameter_at_start_up():
                          text=True, env=env(), timeout=60)
     assert run.returncode == 1
     assert "parameter refused: resolution = -0.5 must be finite and > 0" in run.stderr
+
+
+def test_the_views_thread_ends_when_the_context_shuts_down():
+    """Ctrl-C or SIGTERM shuts the context down before the node stops its threads: the views
+    thread then ends, rather than dying with a traceback at its next publisher call."""
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=int(DOMAIN) + 2)
+    node = MappingNode(context=context, parameter_overrides=[
+        rclpy.parameter.Parameter("autosave_period", value=0.0)])
+    node.shutdown()  # its own threads stop; the loop below runs in this one
+    node.running = True
+    rclpy.shutdown(context=context)
+    node._view_loop()  # returns
 
 
 def test_raw_clouds_are_mapped_through_the_model_parameter(tmp_path):

@@ -15,13 +15,6 @@ def occupied_leaves(tree, min_z: float = -np.inf, max_z: float = np.inf):
     return in_band(tree.leaves(occupied_only=True), min_z, max_z)
 
 
-def occupied_of(leaves, occupancy_thres: float, min_z: float = -np.inf, max_z: float = np.inf):
-    """The same from every leaf of a map (tree.leaves()): what tree.leaves(occupied_only=True)
-    holds, in the band."""
-    occupied = _Subset(leaves, leaves.occupancy > occupancy_thres) if len(leaves.sizes) else leaves
-    return in_band(occupied, min_z, max_z)
-
-
 def in_band(leaves, min_z: float = -np.inf, max_z: float = np.inf):
     keep = (leaves.centers[:, 2] >= min_z) & (leaves.centers[:, 2] <= max_z)
     return _Subset(leaves, keep) if not keep.all() else leaves
