@@ -66,9 +66,10 @@ def live_rate():
 
 
 def ros2_rate():
-    text, link, commit, date = record("ros2.md")
-    received, inserted = find(r"(\d+) of \d+ clouds received, \*\*(\d+) inserted\*\*", text,
-                              "ros2.md")
+    text, link, _, _ = record("ros2.md")
+    commit, date, received, inserted = find(  # the row's own run
+        r"commit ([0-9a-f]{7}), (20\d\d-\d\d-\d\d)[^|]*?(\d+) of \d+ clouds received, "
+        r"\*\*(\d+) inserted\*\*", text, "ros2.md")
     return ("At 10 Hz with the live profile the ROS 2 node inserted %s of %s clouds and "
             "counted the rest as dropped (%s, commit %s, %s)." % (inserted, received, link,
                                                                   commit, date))
