@@ -23,7 +23,9 @@
 // start (no running products to finish, half the memory to fill). Private to the core.
 #pragma once
 
+#if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
 
 #include <algorithm>
 #include <array>
@@ -73,12 +75,18 @@ class OneHotTable {
   double operator()(double s) const { return at(steps_.data(), s); }
   // The steps, for a loop that picks one of two tables per voxel without an extra load.
   const Step* steps() const { return steps_.data(); }
+  // std::min(s, 1.0), as minsd on x86: the compiler makes a branch of std::min there, and
+  // s >= 1 (a tenth of the evaluations) is the data's, unpredictable.
+  static double atMostOne(double s) {
+#if defined(__SSE2__)
+    return _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(1.0), _mm_set_sd(s)));
+#else
+    return std::min(s, 1.0);
+#endif
+  }
   // Without a branch: s >= 1 (or +inf) reads the last step, 0 with slope 0.
   static double at(const Step* steps, double s) {
-    // minsd: std::min(s, 1.0) without the branch the compiler makes of it (s >= 1 is a tenth
-    // of the evaluations, and unpredictable).
-    const double x =
-        _mm_cvtsd_f64(_mm_min_sd(_mm_set_sd(1.0), _mm_set_sd(s))) * KernelTable::kSteps;
+    const double x = atMostOne(s) * KernelTable::kSteps;
     const int i = static_cast<int>(x);
     return double(steps[i].value) + (x - i) * double(steps[i].slope);
   }
