@@ -102,8 +102,8 @@ class _Points:
 
 
 def _channels(msg, points: _Points, base: str, C: int):
-    """(N, C) float64 of `base` (one field of count C or base_0 .. base_{C-1}), "absent", or an
-    error string."""
+    """(N, C) values of `base` (one field of count C or base_0 .. base_{C-1}) in the fields'
+    type (float32 or float64), "absent", or an error string."""
     is_float = (FLOAT32, FLOAT64)
     f = _find(msg, base)
     if f is not None:
@@ -114,7 +114,7 @@ def _channels(msg, points: _Points, base: str, C: int):
         err = _check_field(f, msg.point_step)
         if err:
             return err
-        return points.read(f.offset, f.datatype, C).astype(np.float64).reshape(-1, C)
+        return points.read(f.offset, f.datatype, C).reshape(-1, C)
     if _find(msg, base + "_0") is None:
         return "absent"
     columns = []
@@ -129,7 +129,7 @@ def _channels(msg, points: _Points, base: str, C: int):
         err = _check_field(f, msg.point_step)
         if err:
             return err
-        columns.append(points.read(f.offset, f.datatype).astype(np.float64))
+        columns.append(points.read(f.offset, f.datatype))
     if _find(msg, f"{base}_{C}") is not None:
         return (f"field '{base}_{C}' exists: the cloud has more than C = {C} (num_classes) "
                 "channels")
@@ -230,16 +230,16 @@ def decode(msg, num_classes: int, input: str = "auto",
 
     evidence = None
     if kind in ("evidence", "alpha"):
-        v = values[keep]
+        v = values if nonfinite == 0 else values[keep]  # (float32 a - 1 rounds as in float64)
         e = v - 1.0 if kind == "alpha" else v
-        bad = ~(np.abs(e) <= _FLOAT_MAX) | (e < 0)
-        if bad.any():
-            i, c = _first_bad(bad, index)
+        valid = (e >= 0) & (e <= _FLOAT_MAX)  # NaN fails both
+        if not valid.all():
+            i, c = _first_bad(~valid, index)
             shown = values[i, c]
             rule = ("alpha must be finite and >= 1, within float range" if kind == "alpha"
                     else "evidence must be finite and >= 0, within float range")
             raise CloudError(f"point {i}: {kind} of class {c} is {shown:g} ({rule})")
-        evidence = e.astype(np.float32)
+        evidence = np.ascontiguousarray(e, dtype=np.float32)
     elif kind in ("logits", "probabilities"):
         raw = np.ascontiguousarray(values[keep], dtype=np.float32)
         try:
