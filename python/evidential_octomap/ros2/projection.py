@@ -15,12 +15,14 @@ class Grid:
 
 
 def project(tree, min_z: float = -np.inf, max_z: float = np.inf) -> Grid:
-    return project_leaves(tree.leaves(), tree.resolution, tree.occupancy_thres, min_z, max_z)
+    return project_leaves(tree.leaves(opinions=False), tree.resolution, tree.occupancy_thres,
+                          min_z, max_z)
 
 
 def project_leaves(leaves, res: float, occupancy_thres: float, min_z: float = -np.inf,
                    max_z: float = np.inf) -> Grid:
-    """The same from every leaf of a map (tree.leaves()), e.g. copied out under a lock."""
+    """The same from every leaf of a map (tree.leaves(opinions=False) is enough), e.g. copied
+    out under a lock."""
     if len(leaves.sizes) == 0:
         return Grid(np.zeros((0, 0), dtype=np.int8), (0.0, 0.0), res)
     cells = np.rint(leaves.sizes / res).astype(np.int64)
