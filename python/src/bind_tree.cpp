@@ -8,12 +8,15 @@
 
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 #include "bindings.h"
 #include "evidential_octomap/calibration_file.h"
+#include "evidential_octomap/detail/leaf_walk.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/io.h"
+#include "evidential_octomap/projected_grid.h"
 #include "evidential_octomap/safe_key.h"
 
 namespace evidential_octomap::python {
@@ -47,20 +50,26 @@ Leaves leaves(const EvidentialOcTree& tree, bool occupied_only, bool opinions) {
   std::vector<int32_t> labels;
   {
     nb::gil_scoped_release release;
-    for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it) {
-      if (occupied_only && !tree.isNodeOccupied(*it)) continue;
-      const octomap::point3d c = it.getCoordinate();
-      centers.insert(centers.end(), {c.x(), c.y(), c.z()});
-      sizes.push_back(static_cast<float>(it.getSize()));
-      occupancy.push_back(static_cast<float>(it->getOccupancy()));
-      if (!opinions) continue;  // the read-out is most of the cost
-      const VoxelOpinion o = tree.opinion(&*it);
+    // Occupied leaves only: a free inner node has none below it (a view's walk skips most of
+    // the map's free space).
+    auto descend = [&](const EvidentialOcTreeNode& node, unsigned) {
+      return !occupied_only || tree.isNodeOccupied(node);
+    };
+    auto visit = [&](const EvidentialOcTreeNode& leaf, const octomap::OcTreeKey& corner,
+                     unsigned depth) {
+      if (occupied_only && !tree.isNodeOccupied(leaf)) return;
+      for (int a = 0; a < 3; ++a) centers.push_back(float(tree.keyToCoord(corner[a], depth)));
+      sizes.push_back(static_cast<float>(tree.getNodeSize(depth)));
+      occupancy.push_back(static_cast<float>(leaf.getOccupancy()));
+      if (!opinions) return;  // the read-out is most of the cost
+      const VoxelOpinion o = tree.opinion(&leaf);
       labels.push_back(o.label);
       uncertainty.push_back(o.uncertainty);
       conflict.push_back(o.conflict);
       error_probability.push_back(tree.rule().errorProbability(o));
       belief.insert(belief.end(), o.belief.begin(), o.belief.end());
-    }
+    };
+    detail::walkLeaves(tree, descend, visit);
   }
   const size_t m = sizes.size(), with = opinions ? m : 0;
   return {toNumpy(std::move(centers), {m, 3}),
@@ -71,6 +80,18 @@ Leaves leaves(const EvidentialOcTree& tree, bool occupied_only, bool opinions) {
           toNumpy(std::move(conflict), {with}),
           toNumpy(std::move(error_probability), {with}),
           toNumpy(std::move(belief), {with, size_t(num_classes)})};
+}
+
+// projected_map as (data (H, W) int8, origin (x, y), resolution); row j at y.
+nb::tuple projectedMap(const EvidentialOcTree& tree, double min_z, double max_z) {
+  ProjectedGrid grid;
+  {
+    nb::gil_scoped_release release;
+    grid = projectOccupancy(tree, min_z, max_z);
+  }
+  const size_t height = grid.height, width = grid.width;
+  return nb::make_tuple(toNumpy(std::move(grid.cells), {height, width}),
+                        nb::make_tuple(grid.origin_x, grid.origin_y), grid.resolution);
 }
 
 nb::bytes toBytes(const EvidentialOcTree& tree) {
@@ -337,6 +358,13 @@ void bindTree(nb::module_& m) {
       .def("leaves", &leaves, nb::arg("occupied_only") = false, nb::arg("opinions") = true,
            "Every leaf as arrays; opinions=False: only centers, sizes and occupancy (the "
            "others have 0 rows), several times faster.")
+      .def("projected_map", &projectedMap,
+           nb::arg("min_z") = -std::numeric_limits<double>::infinity(),
+           nb::arg("max_z") = std::numeric_limits<double>::infinity(),
+           "octomap_server's projected_map: (data (H, W) int8, origin (x, y) of the grid's "
+           "corner, resolution); a cell is 100 under an occupied leaf whose centre height is in "
+           "[min_z, max_z], else 0 under such a free leaf, else -1. Row j lies at y. It spans "
+           "the x-y extent of all leaves.")
       // --- files and maps
       .def(
           "save", [](const Tree& t, const std::string& path) { saveMap(t, path); }, nb::arg("path"),

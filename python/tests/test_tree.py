@@ -85,6 +85,18 @@ def test_leaves_without_opinions_give_the_same_geometry_and_occupancy():
     assert len(bare.labels) == len(bare.error_probability) == 0 and bare.belief.shape == (0, 3)
 
 
+def test_the_occupied_leaves_are_the_occupied_rows_of_every_leaf():
+    """occupied_only skips free subtrees whole: it must still give every occupied leaf, in
+    order, with the same values."""
+    tree, _ = wall_tree()
+    every, occupied = tree.leaves(), tree.leaves(occupied_only=True)
+    rows = every.occupancy > tree.occupancy_thres
+    assert 0 < rows.sum() < len(rows) / 4
+    for name in ("centers", "sizes", "occupancy", "labels", "uncertainty", "conflict",
+                 "error_probability", "belief"):
+        np.testing.assert_array_equal(getattr(occupied, name), getattr(every, name)[rows])
+
+
 def test_pose_input_equals_points_transformed_by_numpy():
     points_S, evidence = wall()
     yaw = 0.3

@@ -6,69 +6,32 @@
 namespace evidential_octomap {
 namespace {
 
-// Walks every leaf whose centre is in `band` and hands `mark` the grid index of each cell under
-// it. The grid spans the tree's metric x-y extent; keys give exact cell indices for leaves of
-// any depth.
-template <typename Mark>
-nav_msgs::OccupancyGrid project(const EvidentialOcTree& tree, const HeightBand& band,
-                                const std::string& frame_id, Mark mark) {
-  nav_msgs::OccupancyGrid grid;
-  grid.header.frame_id = frame_id;
-  grid.info.resolution = static_cast<float>(tree.getResolution());
-  grid.info.origin.orientation.w = 1.0;
-  if (tree.getRoot() == nullptr) return grid;
-  double min_x, min_y, min_z, max_x, max_y, max_z;
-  tree.getMetricMin(min_x, min_y, min_z);
-  tree.getMetricMax(max_x, max_y, max_z);
-  const octomap::OcTreeKey min_key = tree.coordToKey(min_x, min_y, min_z);
-  const octomap::OcTreeKey max_key = tree.coordToKey(max_x - 1e-6, max_y - 1e-6, max_z - 1e-6);
-  grid.info.width = max_key[0] - min_key[0] + 1;
-  grid.info.height = max_key[1] - min_key[1] + 1;
-  const octomap::point3d origin = tree.keyToCoord(min_key);
-  const double half = 0.5 * tree.getResolution();
-  grid.info.origin.position.x = origin.x() - half;
-  grid.info.origin.position.y = origin.y() - half;
-  grid.data.assign(size_t(grid.info.width) * grid.info.height, -1);
-  const unsigned depth = tree.getTreeDepth();
-  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    if (!band.contains(it.getZ())) continue;
-    const octomap::OcTreeKey corner = it.getIndexKey();
-    const int cells = 1 << (depth - it.getDepth());
-    for (int dx = 0; dx < cells; ++dx)
-      for (int dy = 0; dy < cells; ++dy) {
-        const size_t i = corner[0] + dx - min_key[0], j = corner[1] + dy - min_key[1];
-        if (i < grid.info.width && j < grid.info.height)
-          mark(*it, &grid.data[j * grid.info.width + i]);
-      }
-  }
-  return grid;
+nav_msgs::OccupancyGrid toMessage(const ProjectedGrid& grid, const std::string& frame_id) {
+  nav_msgs::OccupancyGrid msg;
+  msg.header.frame_id = frame_id;
+  msg.info.resolution = static_cast<float>(grid.resolution);
+  msg.info.width = grid.width;
+  msg.info.height = grid.height;
+  msg.info.origin.position.x = grid.origin_x;
+  msg.info.origin.position.y = grid.origin_y;
+  msg.info.origin.orientation.w = 1.0;
+  msg.data = grid.cells;
+  return msg;
 }
 
 }  // namespace
 
 nav_msgs::OccupancyGrid projectOccupancy(const EvidentialOcTree& tree, const HeightBand& band,
                                          const std::string& frame_id) {
-  return project(tree, band, frame_id, [&](const EvidentialOcTreeNode& leaf, int8_t* cell) {
-    if (tree.isNodeOccupied(leaf))
-      *cell = 100;
-    else if (*cell == -1)
-      *cell = 0;
-  });
+  return toMessage(evidential_octomap::projectOccupancy(tree, band.min_z, band.max_z), frame_id);
 }
 
 nav_msgs::OccupancyGrid projectClassCosts(const EvidentialOcTree& tree, const HeightBand& band,
                                           const std::vector<int8_t>& class_costs,
                                           int8_t no_class_cost, const std::string& frame_id) {
-  return project(tree, band, frame_id, [&](const EvidentialOcTreeNode& leaf, int8_t* cell) {
-    if (!tree.isNodeOccupied(leaf)) {
-      if (*cell == -1) *cell = 0;
-      return;
-    }
-    const int label = leaf.hasSemantics() ? tree.opinion(&leaf).label : -1;
-    const int8_t cost =
-        label >= 0 && label < int(class_costs.size()) ? class_costs[label] : no_class_cost;
-    *cell = std::max(*cell, cost);
-  });
+  return toMessage(evidential_octomap::projectClassCosts(tree, band.min_z, band.max_z,
+                                                         class_costs, no_class_cost),
+                   frame_id);
 }
 
 std::vector<int8_t> classCosts(const ClassTable& classes,

@@ -1,8 +1,6 @@
-// 2-D maps for planners, projected from the 3-D map as octomap_server's projected_map:
-// every leaf whose centre lies in [min_z, max_z] marks the cells under it occupied (100) or free
-// (0, unless another leaf of the column is occupied); cells no such leaf covers are unknown (-1).
-// The grid covers the tree's metric x-y extent at leaf resolution. Free functions, testable
-// without a roscore.
+// The core's 2-D maps for planners (evidential_octomap/projected_grid.h: octomap_server's
+// projected_map rule) as nav_msgs/OccupancyGrid, and the per-class costs from the node's table.
+// Free functions, testable without a roscore.
 #pragma once
 
 #include <nav_msgs/OccupancyGrid.h>
@@ -14,6 +12,7 @@
 #include "conversions.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/projected_grid.h"
 
 namespace evidential_octomap {
 
@@ -21,11 +20,7 @@ namespace evidential_octomap {
 nav_msgs::OccupancyGrid projectOccupancy(const EvidentialOcTree& tree, const HeightBand& band,
                                          const std::string& frame_id);
 
-// The same grid with a cost per class: an occupied leaf marks its cells with the cost of its
-// class (`class_costs`, one value 0..100 per class; `no_class_cost` for occupied leaves without
-// evidence), the largest cost of the column wins; free and unknown as in projectOccupancy. With
-// ground classes at cost 0, a planner sees the road as drivable where projected_map sees an
-// obstacle.
+// The same grid with a cost per class (the core's projectClassCosts).
 nav_msgs::OccupancyGrid projectClassCosts(const EvidentialOcTree& tree, const HeightBand& band,
                                           const std::vector<int8_t>& class_costs,
                                           int8_t no_class_cost, const std::string& frame_id);

@@ -352,15 +352,13 @@ class MappingNode(Node):
     def _publish_views(self):
         v = self.values
         t0 = time.monotonic()
+        band = (v["occupancy_min_z"], v["occupancy_max_z"])
         with self.lock:  # only the copies out: the insert waits for nothing else
             occupied = self.tree.leaves(occupied_only=True)
-            every = self.tree.leaves(opinions=False)  # the grid's free cells: no read-out
-            resolution, threshold = self.tree.resolution, self.tree.occupancy_thres
+            grid = projection.project(self.tree, *band)
         self.view_lock_s = time.monotonic() - t0
         self.status.views(self.view_lock_s)
-        band = (v["occupancy_min_z"], v["occupancy_max_z"])
         leaves = views.in_band(occupied, *band)
-        grid = projection.project_leaves(every, resolution, threshold, *band)
         header = self._header()
         self.cloud_pub.publish(cloud_message(header, views.cloud_columns(leaves, self.classes)))
         self.grid_pub.publish(self._grid_message(header, grid))
