@@ -25,7 +25,8 @@ from sensor_msgs.msg import PointCloud2, PointField  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 
-from .node import LATCHED, TF_STATIC_QOS  # noqa: E402
+from .node import LATCHED  # noqa: E402
+from .tf_listener import TF_STATIC_QOS  # noqa: E402
 
 
 def transform(stamp, parent, child, M):
@@ -134,8 +135,10 @@ def main(argv=None) -> int:
         t_next += period
         time.sleep(max(0.0, t_next - time.monotonic()))
     wait_for_node()
-    # a reliable writer that goes away drops what its readers have not acknowledged yet
-    pub.wait_for_all_acked(rclpy.duration.Duration(seconds=30))
+    # a reliable writer that goes away drops what its readers have not acknowledged yet: the
+    # last clouds, and the transforms they wait for
+    for writer in (pub, tf_pub):
+        writer.wait_for_all_acked(rclpy.duration.Duration(seconds=30))
     print(json.dumps({"sent": sent}), flush=True)
     node.destroy_node()
     rclpy.try_shutdown()
