@@ -45,11 +45,12 @@ void checkRows(const MatrixIn& evidence, size_t points, int num_classes) {
 }
 
 Leaves leaves(const EvidentialOcTree& tree, bool occupied_only, bool opinions) {
-  const int num_classes = tree.numClasses();
+  const size_t num_classes = size_t(tree.numClasses());
   std::vector<float> centers, sizes, occupancy, uncertainty, conflict, error_probability, belief;
   std::vector<int32_t> labels;
   {
     nb::gil_scoped_release release;
+    std::vector<const EvidentialOcTreeNode*> nodes;
     // Occupied leaves only: a free inner node has none below it (a view's walk skips most of
     // the map's free space).
     auto descend = [&](const EvidentialOcTreeNode& node, unsigned) {
@@ -61,15 +62,26 @@ Leaves leaves(const EvidentialOcTree& tree, bool occupied_only, bool opinions) {
       for (int a = 0; a < 3; ++a) centers.push_back(float(tree.keyToCoord(corner[a], depth)));
       sizes.push_back(static_cast<float>(tree.getNodeSize(depth)));
       occupancy.push_back(static_cast<float>(leaf.getOccupancy()));
-      if (!opinions) return;  // the read-out is most of the cost
-      const VoxelOpinion o = tree.opinion(&leaf);
-      labels.push_back(o.label);
-      uncertainty.push_back(o.uncertainty);
-      conflict.push_back(o.conflict);
-      error_probability.push_back(tree.rule().errorProbability(o));
-      belief.insert(belief.end(), o.belief.begin(), o.belief.end());
+      nodes.push_back(&leaf);
     };
     detail::walkLeaves(tree, descend, visit);
+    if (opinions) {  // the read-out is most of the cost: in parallel, as query's
+      const size_t m = nodes.size();
+      labels.resize(m);
+      uncertainty.resize(m);
+      conflict.resize(m);
+      error_probability.resize(m);
+      belief.resize(m * num_classes);
+#pragma omp parallel for schedule(static)
+      for (size_t i = 0; i < m; ++i) {
+        const VoxelOpinion o = tree.opinion(nodes[i]);
+        labels[i] = o.label;
+        uncertainty[i] = o.uncertainty;
+        conflict[i] = o.conflict;
+        error_probability[i] = tree.rule().errorProbability(o);
+        std::copy(o.belief.begin(), o.belief.end(), belief.begin() + i * num_classes);
+      }
+    }
   }
   const size_t m = sizes.size(), with = opinions ? m : 0;
   return {toNumpy(std::move(centers), {m, 3}),
@@ -79,7 +91,7 @@ Leaves leaves(const EvidentialOcTree& tree, bool occupied_only, bool opinions) {
           toNumpy(std::move(uncertainty), {with}),
           toNumpy(std::move(conflict), {with}),
           toNumpy(std::move(error_probability), {with}),
-          toNumpy(std::move(belief), {with, size_t(num_classes)})};
+          toNumpy(std::move(belief), {with, num_classes})};
 }
 
 // projected_map as (data (H, W) int8, origin (x, y), resolution); row j at y.

@@ -10,8 +10,10 @@ machine still maps every scan in order (the map equals the CLI's); --rate R publ
 """
 import argparse
 import json
+import os
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -76,6 +78,12 @@ def main(argv=None) -> int:
     dataset = _core.Dataset.open(args.data, classes)
     n = len(dataset) if args.scans is None else min(args.scans, len(dataset))
     options = WriteOptions()
+    # Fast DDS's writers repair a lost sample at their next heartbeat, 3 s by default; a /tf
+    # lost beside large clouds then came too late for them (fastdds_replay.xml). A profile of
+    # the user's own is kept.
+    if not any(os.environ.get(f"FAST{v}_DEFAULT_PROFILES_FILE") for v in ("DDS", "RTPS")):
+        os.environ["FASTDDS_DEFAULT_PROFILES_FILE"] = str(
+            Path(__file__).with_name("fastdds_replay.xml"))
     rclpy.init(args=sys.argv if argv is None else argv)
     node = rclpy.create_node("evidential_octomap_replay")
     # reliable, keeping 10: a reader slower than the rate still gets each cloud of a burst
@@ -88,10 +96,12 @@ def main(argv=None) -> int:
         s = json.loads(msg.data)
         taken[0] = s["clouds_inserted"] + s["clouds_dropped"]
     node.create_subscription(String, args.status, on_status, LATCHED)
-    # wait for the node (its cloud_in subscription) before sending anything
-    deadline = time.monotonic() + 30
-    while pub.get_subscription_count() == 0 and time.monotonic() < deadline:
-        rclpy.spin_once(node, timeout_sec=0.1)
+    # wait for the node (its cloud_in subscription, then its /tf one, a moment more: the two
+    # are matched one by one) before sending anything
+    for writer, wait_s in ((pub, 30.0), (tf_pub, 2.0)):
+        deadline = time.monotonic() + wait_s
+        while writer.get_subscription_count() == 0 and time.monotonic() < deadline:
+            rclpy.spin_once(node, timeout_sec=0.1)
     T_base_sensor = np.eye(4)
     T_base_sensor[:3, 3] = options.base_to_sensor
     start = rclpy.time.Time(nanoseconds=options.start_ns).to_msg()
