@@ -38,20 +38,21 @@ except ImportError as e:  # pragma: no cover - said once, plainly
                      "\".[ros2]\"") from None
 try:
     from evidential_octomap_msgs.srv import QueryMap, SaveMap
-    from tf2_msgs.msg import TFMessage  # noqa: F401 (tf_listener.py's)
+    from tf2_msgs.msg import TFMessage
 except ImportError as e:  # pragma: no cover
     raise SystemExit(f"evidential_octomap.ros2 needs interfaces no wheel provides ({e}): pip "
                      "install ./python/ros2_interfaces/tf2_msgs "
                      "./python/ros2_interfaces/evidential_octomap_msgs (they generate them)") \
         from None
 
-from .tf_listener import TfListener  # noqa: E402 (after the wheels' check)
-
 NODE_NAME = "evidential_mapping_node"
 # Latched, as the ROS 1 node's map topics: a late subscriber gets the last message.
 LATCHED = QoSProfile(depth=1, history=HistoryPolicy.KEEP_LAST,
                      reliability=ReliabilityPolicy.RELIABLE,
                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+TF_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+TF_STATIC_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                           durability=DurabilityPolicy.TRANSIENT_LOCAL)
 MARKER_TOPICS = {"class": "occupied_cells_vis_array", "uncertainty": "uncertainty_cells_vis_array",
                  "conflict": "conflict_cells_vis_array"}
 
@@ -103,15 +104,19 @@ class MappingNode(Node):
         self.running = True
         self.view_lock_s = 0.0
 
-        # clouds and services each in their own group, so a burst of clouds never holds up a
-        # service call; the transforms on a thread of their own (tf_listener.py)
-        services = MutuallyExclusiveCallbackGroup()
+        # clouds, TF and services each in their own group, so a burst of clouds never holds
+        # up the transforms they wait for, nor a service call
+        services, tf_group = MutuallyExclusiveCallbackGroup(), MutuallyExclusiveCallbackGroup()
         cloud_qos = (qos_profile_sensor_data if self.values["cloud_in_qos"] == "sensor_data"
                      else QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE))
         self.create_subscription(PointCloud2, "cloud_in", self._on_cloud, cloud_qos,
                                  event_callbacks=SubscriptionEventCallbacks(
                                      message_lost=self._on_lost))
-        self.tf_listener = TfListener(self, self.tf)
+        self.create_subscription(TFMessage, "/tf", lambda m: self.tf.add_message(m), TF_QOS,
+                                 callback_group=tf_group)
+        self.create_subscription(TFMessage, "/tf_static",
+                                 lambda m: self.tf.add_message(m, static=True), TF_STATIC_QOS,
+                                 callback_group=tf_group)
         self.markers = {v: self.create_publisher(MarkerArray, t, LATCHED)
                         for v, t in MARKER_TOPICS.items()}
         self.marker_subscribers = {v: 0 for v in MARKER_TOPICS}
@@ -443,7 +448,6 @@ class MappingNode(Node):
         self.queue.close()
         for t in self.threads:
             t.join(timeout=5)
-        self.tf_listener.shutdown()
         if self.foxglove is not None:
             self.foxglove.close()
 

@@ -27,8 +27,7 @@ from sensor_msgs.msg import PointCloud2, PointField  # noqa: E402
 from std_msgs.msg import String  # noqa: E402
 from tf2_msgs.msg import TFMessage  # noqa: E402
 
-from .node import LATCHED  # noqa: E402
-from .tf_listener import TF_STATIC_QOS  # noqa: E402
+from .node import LATCHED, TF_STATIC_QOS  # noqa: E402
 
 
 def transform(stamp, parent, child, M):
