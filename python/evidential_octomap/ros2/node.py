@@ -1,13 +1,14 @@
 """The ROS 2 mapping node: converts messages and wires them to the core and to the ROS-free
 modules beside it (field rules: pointcloud2.py; TF: tf_wait.py; parameters and their checks:
 parameters.py; views: views.py, projection.py; status: status.py). The insert runs on its own
-thread behind a latest-only queue, as the ROS 1 node's, so the executor keeps taking clouds, TF,
-parameters and service calls while a scan is inserted."""
+thread behind a latest-only queue, as the ROS 1 node's: the executor reads each cloud and waits
+for its transform, and keeps taking TF, parameters and service calls while a scan is inserted."""
 import os
 import sys
 import threading
 import time
 from pathlib import Path
+from typing import NamedTuple, Optional
 
 import numpy as np
 
@@ -55,6 +56,15 @@ TF_STATIC_QOS = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
                            durability=DurabilityPolicy.TRANSIENT_LOCAL)
 MARKER_TOPICS = {"class": "occupied_cells_vis_array", "uncertainty": "uncertainty_cells_vis_array",
                  "conflict": "conflict_cells_vis_array"}
+
+
+class ReadyCloud(NamedTuple):
+    """A received cloud, read and with its pose, waiting for the insert."""
+    header: object
+    points: np.ndarray    # (N, 3) in the cloud's frame
+    evidence: np.ndarray  # (N, C)
+    pose: np.ndarray      # 4 x 4, the cloud's frame -> frame_id
+    source: str           # which field the evidence came from
 
 
 def stamp_ns(stamp) -> int:
@@ -106,11 +116,11 @@ class MappingNode(Node):
 
         # clouds, TF and services each in their own group, so a burst of clouds never holds
         # up the transforms they wait for, nor a service call
-        services, tf_group = MutuallyExclusiveCallbackGroup(), MutuallyExclusiveCallbackGroup()
+        services, tf_group, clouds = (MutuallyExclusiveCallbackGroup() for _ in range(3))
         cloud_qos = (qos_profile_sensor_data if self.values["cloud_in_qos"] == "sensor_data"
                      else QoSProfile(depth=5, reliability=ReliabilityPolicy.RELIABLE))
         self.create_subscription(PointCloud2, "cloud_in", self._on_cloud, cloud_qos,
-                                 event_callbacks=SubscriptionEventCallbacks(
+                                 callback_group=clouds, event_callbacks=SubscriptionEventCallbacks(
                                      message_lost=self._on_lost))
         self.create_subscription(TFMessage, "/tf", lambda m: self.tf.add_message(m), TF_QOS,
                                  callback_group=tf_group)
@@ -212,11 +222,47 @@ class MappingNode(Node):
 
     # --- input ----------------------------------------------------------------------------
     def _on_cloud(self, msg):
+        """Reception, on the executor (as the ROS 1 node's reception thread): the cloud is read,
+        its evidence made and its transform awaited here, so the insert waits for none of them."""
         self.status.received_cloud()
-        pushed_out = self.queue.put(msg)
+        ready = self._receive(msg)
+        if ready is None:
+            return
+        pushed_out = self.queue.put(ready)
         if pushed_out is not None:
-            self._drop(QUEUE_FULL, pushed_out, "the insert queue was full (insert_queue_size "
-                       f"{self.values['insert_queue_size']}): a newer cloud replaced it")
+            self._drop(QUEUE_FULL, pushed_out.header, "the insert queue was full "
+                       f"(insert_queue_size {self.values['insert_queue_size']}): a newer cloud "
+                       "replaced it")
+
+    def _receive(self, msg) -> Optional[ReadyCloud]:
+        v = self.values
+        t0 = time.monotonic()
+        try:
+            cloud = pointcloud2.decode(msg, self.classes.num_classes, v["input_type"],
+                                       v["label_evidence"], v["logit_transform"],
+                                       v["probability_evidence"],
+                                       self.classes if v["label_is_raw"] else None)
+        except pointcloud2.CloudError as e:
+            return self._drop(MALFORMED, msg.header, f"{e}; map unchanged")
+        evidence = cloud.evidence
+        if evidence is None:
+            if self.model is None:
+                return self._drop(NO_SEMANTICS, msg.header, "no semantic field (evidence, alpha, "
+                                  "logits, probabilities or label; fields: "
+                                  f"{', '.join(f.name for f in msg.fields)}) and no `model`")
+            try:
+                evidence = np.asarray(self.model(cloud.points, cloud.fields), dtype=np.float32)
+            except Exception as e:  # a user's model: report, keep mapping
+                return self._drop(REFUSED, msg.header,
+                                  f"model failed: {type(e).__name__}: {e}")
+        t_read = time.monotonic()
+        try:
+            pose = self.tf.lookup(v["frame_id"], msg.header.frame_id, stamp_ns(msg.header.stamp),
+                                  v["transform_timeout"])
+        except TfError as e:
+            return self._drop(NO_TRANSFORM, msg.header, str(e))
+        self.status.received_stages(t_read - t0, time.monotonic() - t_read)
+        return ReadyCloud(msg.header, cloud.points, evidence, pose, cloud.source)
 
     def _on_lost(self, info):
         """Clouds DDS lost before the node saw them (its reader's history overflowed, or
@@ -226,17 +272,17 @@ class MappingNode(Node):
                                   f"reaching the node ({info.total_count} in all)",
                                   throttle_duration_sec=2.0)
 
-    def _drop(self, kind, msg, reason):
-        frame = msg.header.frame_id
-        text = f"cloud dropped (frame {frame}, {stamp_ns(msg.header.stamp) / 1e9:.3f} s): {reason}"
-        self.status.drop(kind, text, stamp_ns(msg.header.stamp), frame)
+    def _drop(self, kind, header, reason):
+        frame = header.frame_id
+        text = f"cloud dropped (frame {frame}, {stamp_ns(header.stamp) / 1e9:.3f} s): {reason}"
+        self.status.drop(kind, text, stamp_ns(header.stamp), frame)
         self.get_logger().warning(text, throttle_duration_sec=2.0)
 
     def _insert_loop(self):
         while self.running:
-            msg = self.queue.get(timeout=0.2)
-            if msg is not None:
-                self._insert(msg)
+            ready = self.queue.get(timeout=0.2)
+            if ready is not None:
+                self._insert(ready)
             elif self.map_size_stale:  # no cloud for a moment: the status catches up
                 with self.lock:
                     self._record_map_size()
@@ -259,43 +305,22 @@ class MappingNode(Node):
         self.map_size_walk_s = self.map_size_recorded - t0
         self.map_size_stale = False
 
-    def _insert(self, msg):
-        v = self.values
-        try:
-            cloud = pointcloud2.decode(msg, self.classes.num_classes, v["input_type"],
-                                       v["label_evidence"], v["logit_transform"],
-                                       v["probability_evidence"],
-                                       self.classes if v["label_is_raw"] else None)
-        except pointcloud2.CloudError as e:
-            return self._drop(MALFORMED, msg, f"{e}; map unchanged")
-        evidence = cloud.evidence
-        if evidence is None:
-            if self.model is None:
-                return self._drop(NO_SEMANTICS, msg, "no semantic field (evidence, alpha, "
-                                  "logits, probabilities or label; fields: "
-                                  f"{', '.join(f.name for f in msg.fields)}) and no `model`")
-            try:
-                evidence = np.asarray(self.model(cloud.points, cloud.fields), dtype=np.float32)
-            except Exception as e:  # a user's model: report, keep mapping
-                return self._drop(REFUSED, msg, f"model failed: {type(e).__name__}: {e}")
-        try:
-            pose = self.tf.lookup(v["frame_id"], msg.header.frame_id, stamp_ns(msg.header.stamp),
-                                  v["transform_timeout"])
-        except TfError as e:
-            return self._drop(NO_TRANSFORM, msg, str(e))
-        t0 = time.monotonic()
+    def _insert(self, ready: ReadyCloud):
+        t_wait = time.monotonic()
         try:
             with self.lock:
-                self.tree.insert_scan(cloud.points, evidence, pose=pose)
+                t0 = time.monotonic()
+                self.tree.insert_scan(ready.points, ready.evidence, pose=ready.pose)
+                t_inserted = time.monotonic()
                 self._map_size_after_insert()
                 if self.foxglove is not None:  # the cloud, the pose, the map when due
-                    self.foxglove.update(self.tree, cloud.points, pose,
-                                         stamp_ns(msg.header.stamp), msg.header.frame_id,
-                                         evidence)
+                    self.foxglove.update(self.tree, ready.points, ready.pose,
+                                         stamp_ns(ready.header.stamp), ready.header.frame_id,
+                                         ready.evidence)
         except ValueError as e:
-            return self._drop(REFUSED, msg, f"evidence refused: {e}; map unchanged")
-        self.status.inserted_cloud(len(cloud.points), time.monotonic() - t0)
-        if not self.tree.calibrated and not cloud.source.startswith(("label", "none")):
+            return self._drop(REFUSED, ready.header, f"evidence refused: {e}; map unchanged")
+        self.status.inserted_cloud(len(ready.points), t0 - t_wait, t_inserted - t0)
+        if not self.tree.calibrated and not ready.source.startswith(("label", "none")):
             self.get_logger().warning(f"{_core.UNCALIBRATED_NOTE} (calibration_file)",
                                       once=True)
         self.unsaved = True

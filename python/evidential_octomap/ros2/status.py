@@ -1,5 +1,7 @@
 """What the node has done and why it dropped what it dropped, as one JSON document (the status
-topic): counts by reason, the last drop with its reason, insert times and the map's size."""
+topic): counts by reason, the last drop with its reason, the time of each stage a cloud passes
+(reading it, waiting for its transform, waiting for the map lock, the insert) and the map's
+size."""
 import json
 import statistics
 import threading
@@ -9,6 +11,9 @@ from collections import Counter, deque
 # Why a cloud is not in the map, as counted (the reason text of each drop says more).
 MALFORMED, NO_SEMANTICS, NO_TRANSFORM, QUEUE_FULL, REFUSED = (
     "malformed", "no_semantic_field", "no_transform", "queue_full", "evidence_refused")
+# A cloud's stages, in order: read (fields, evidence; a model), tf_wait (on the executor),
+# lock_wait (behind the views or a service), insert (the insert thread).
+STAGES = ("read", "tf_wait", "lock_wait", "insert")
 
 
 class Status:
@@ -23,7 +28,7 @@ class Status:
         self.points = 0
         self.dropped = Counter()
         self.last_drop = None
-        self.insert_ms = deque(maxlen=100)
+        self.stage_ms = {stage: deque(maxlen=100) for stage in STAGES}
         self.map = {}
         self.events = deque(maxlen=10)  # parameter changes, saves, resets, with their results
 
@@ -42,11 +47,17 @@ class Status:
             self.last_drop = {"kind": kind, "reason": reason, "stamp_ns": stamp_ns,
                               "frame": frame}
 
-    def inserted_cloud(self, points: int, seconds: float):
+    def received_stages(self, read_s: float, tf_wait_s: float):
+        with self._lock:
+            self.stage_ms["read"].append(1000.0 * read_s)
+            self.stage_ms["tf_wait"].append(1000.0 * tf_wait_s)
+
+    def inserted_cloud(self, points: int, lock_wait_s: float, insert_s: float):
         with self._lock:
             self.inserted += 1
             self.points += points
-            self.insert_ms.append(1000.0 * seconds)
+            self.stage_ms["lock_wait"].append(1000.0 * lock_wait_s)
+            self.stage_ms["insert"].append(1000.0 * insert_s)
 
     def views(self, lock_seconds: float):
         with self._lock:
@@ -66,7 +77,9 @@ class Status:
 
     def as_dict(self, queue_length: int = 0) -> dict:
         with self._lock:
-            times = list(self.insert_ms)
+            stages = {f"{stage}_ms_median": round(statistics.median(t), 1) if t else None
+                      for stage, t in self.stage_ms.items()}
+            insert = self.stage_ms["insert"]
             return {
                 "uptime_s": round(time.monotonic() - self.started, 3),
                 "clouds_received": self.received,
@@ -77,8 +90,8 @@ class Status:
                 "dropped_by_reason": dict(self.dropped),
                 "last_drop": self.last_drop,
                 "insert_queue": queue_length,
-                "insert_ms_median": round(statistics.median(times), 1) if times else None,
-                "insert_ms_last": round(times[-1], 1) if times else None,
+                **stages,
+                "insert_ms_last": round(insert[-1], 1) if insert else None,
                 "map": self.map,
                 "views_published": self.views_published,
                 "views_lock_ms": (round(self.views_lock_ms, 1) if self.views_lock_ms is not None
