@@ -51,7 +51,7 @@ def node(tmp_path_factory):
          "-p", "publish_rate:=2.0", "-p", f"save_path:={out / 'saved' / 'map.ot'}",
          "-p", "autosave_period:=1.0", "-p", f"autosave_path:={out / 'autosave.ot'}",
          "-p", "transform_timeout:=0.3", "-p", "foxglove_port:=0"], stdout=log,
-        stderr=subprocess.STDOUT, env=env())
+        stderr=subprocess.STDOUT, env={k: v for k, v in env().items() if k != "OMP_WAIT_POLICY"})
     yield process, out
     process.terminate()
     try:
@@ -289,6 +289,14 @@ def test_at_10_hz_every_cloud_is_inserted_or_counted_as_dropped(saved, client, n
     assert set(dropped) <= {"queue_full", "no_transform"}, s["last_drop"]
     print(f"10 Hz: {received} of {sent} clouds received ({lost} reported lost in DDS), "
           f"{inserted} inserted, dropped {dropped}; median insert {s['insert_ms_median']} ms")
+
+
+def test_the_node_runs_with_sleeping_openmp_threads(replayed, node):
+    """launch/mapping.launch's OMP_WAIT_POLICY=passive, for the ROS 2 node too: the running
+    process's environment has it (the fixture started it without)."""
+    process, _ = node
+    environ = open(f"/proc/{process.pid}/environ", "rb").read().split(b"\0")
+    assert b"OMP_WAIT_POLICY=passive" in environ
 
 
 def test_the_console_script_refuses_a_bad_parameter_at_start_up():
