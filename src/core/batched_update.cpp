@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <utility>
 
+#include "evidential_octomap/detail/leaf_walk.h"
 #include "evidential_octomap/detail/tree_editing.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "morton.h"
@@ -282,12 +283,19 @@ size_t EvidentialOcTree::applyUpdatesRecurs(EvidentialOcTreeNode* node, unsigned
     if (unchanged) return 0;
     expandLeaf(node, edit);
   }
+  // The children (updateInnerNode reads all of them) and, while a child is updated, the next
+  // one's children array are asked for ahead: each is a likely cache miss.
+  detail::prefetchChildren(*this, node);
   if (depth + 1 == tree_depth) return applyLeafUpdates(node, begin, end, batch, edit);
   const int level = static_cast<int>(tree_depth - 1 - depth);
   size_t changed = 0;
   for (const VoxelUpdate* first = begin; first != end;) {
     const unsigned child = childIndex(first->key, level);
     const VoxelUpdate* last = endOfChildRun(first, end, level, child);
+    if (last != end && nodeChildExists(node, childIndex(last->key, level))) {
+      const auto* next = getNodeChild(node, childIndex(last->key, level));
+      if (next->children) __builtin_prefetch(next->children);
+    }
     bool created = false;
     if (!nodeChildExists(node, child) &&
         (batch.create_semantic_leaves ||

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "evidential_octomap/detail/leaf_walk.h"
 #include "kept_buffers.h"
 #include "morton.h"
 #include "radix_sort.h"
@@ -157,6 +158,7 @@ void ScanSubtrees::markLeaves(const EvidentialOcTreeNode* node, int x, int y, in
   }
   if (tree_->nodeHasChildren(node)) {
     const int half = size / 2;
+    detail::prefetchChildren(*tree_, node);
     for (unsigned c = 0; c < 8; ++c) {
       if (tree_->nodeChildExists(node, c)) {
         markLeaves(tree_->getNodeChild(node, c), x + (c & 1 ? half : 0), y + (c & 2 ? half : 0),
