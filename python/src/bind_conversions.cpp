@@ -1,14 +1,18 @@
-// Per-point conversions of the core, so Python turns network outputs into evidence with the same
-// code as the ROS node (src/ros/conversions.cpp calls the same functions): logits and class
-// probabilities (subjective_logic.h), and the learned evidence head (learned_evidence.h).
+// Per-point conversions of the core, so Python turns clouds and network outputs into evidence
+// with the same code as the ROS 1 node: PointCloud2 clouds (pointcloud2_reader.h), logits and
+// class probabilities (subjective_logic.h), and the learned evidence head (learned_evidence.h).
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
+#include <cstring>
 #include <string>
+#include <tuple>
 
 #include "bindings.h"
 #include "evidential_octomap/evidence/learned_evidence.h"
+#include "evidential_octomap/pointcloud2_reader.h"
 #include "evidential_octomap/subjective_logic.h"
 
 namespace evidential_octomap::python {
@@ -36,9 +40,66 @@ Array<float> convertRows(const MatrixIn& values, Convert convert) {
   return toNumpy(std::move(out), {n, c});
 }
 
+using BytesIn = nb::ndarray<const uint8_t, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+using FieldIn = std::tuple<std::string, uint32_t, uint8_t, uint32_t>;
+
+// (points (N, 3) float32, evidence (N, C) float32 or None, source, non-finite points dropped);
+// ValueError with the reader's message for a cloud it refuses.
+nb::tuple readCloud(const std::vector<FieldIn>& fields, const BytesIn& data, uint32_t height,
+                    uint32_t width, uint32_t point_step, uint32_t row_step, bool is_bigendian,
+                    int num_classes, const std::string& input, float label_magnitude,
+                    const std::string& logit_transform, float probability_magnitude,
+                    const ClassTable* raw_label_table) {
+  CloudLayout layout;
+  for (const auto& [name, offset, datatype, count] : fields)
+    layout.fields.push_back({name, offset, datatype, count});
+  layout.height = height;
+  layout.width = width;
+  layout.point_step = point_step;
+  layout.row_step = row_step;
+  layout.is_bigendian = is_bigendian;
+  layout.data = data.data();
+  layout.size = data.shape(0);
+  CloudReadOptions options;
+  options.num_classes = num_classes;
+  options.input = evidenceInputFromName(input);
+  options.label_magnitude = label_magnitude;
+  options.logit_transform = logitTransformFromName(logit_transform);
+  options.probability_magnitude = probability_magnitude;
+  options.raw_label_table = raw_label_table;
+  options.semantics_optional = true;  // a model may give the evidence
+  SemanticCloud cloud;
+  std::string error;
+  std::vector<float> points;
+  {
+    nb::gil_scoped_release release;
+    error = readPointCloud2(layout, options, &cloud);
+    points.resize(cloud.points_S.size() * 3);
+    for (size_t i = 0; error.empty() && i < cloud.points_S.size(); ++i)
+      std::memcpy(&points[3 * i], &cloud.points_S[i], 3 * sizeof(float));
+  }
+  if (!error.empty()) throw std::invalid_argument(error);
+  const size_t n = cloud.points_S.size();
+  nb::object evidence = nb::none();
+  if (!cloud.evidence.empty())
+    evidence = nb::cast(toNumpy(std::move(cloud.evidence), {n, size_t(num_classes)}));
+  return nb::make_tuple(toNumpy(std::move(points), {n, 3}), evidence, cloud.source,
+                        cloud.nonfinite_points);
+}
+
 }  // namespace
 
 void bindConversions(nb::module_& m) {
+  m.def("read_pointcloud2", &readCloud, nb::arg("fields"), nb::arg("data"), nb::arg("height"),
+        nb::arg("width"), nb::arg("point_step"), nb::arg("row_step"), nb::arg("is_bigendian"),
+        nb::arg("num_classes"), nb::arg("input") = "auto",
+        nb::arg("label_magnitude") = kEvidenceMagnitude, nb::arg("logit_transform") = "softmax",
+        nb::arg("probability_magnitude") = kEvidenceMagnitude,
+        nb::arg("raw_label_table").none() = nb::none(),
+        "A sensor_msgs/PointCloud2's points and evidence by the ROS 1 node's field rules (the "
+        "same reader): fields as (name, offset, datatype, count), data as uint8. Returns (points "
+        "(N, 3), evidence (N, C) or None without a semantic field, source, non-finite points "
+        "dropped); raises ValueError saying what is wrong. pointcloud2.decode wraps it.");
   m.def(
       "evidence_from_logits",
       [](const MatrixIn& logits, const std::string& transform, float magnitude) {

@@ -16,48 +16,12 @@
 #include "evidential_octomap/OccupancyMap.h"
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "evidential_octomap/pointcloud2_reader.h"
 #include "evidential_octomap/subjective_logic.h"
 
 namespace evidential_octomap {
 
-// Which per-point field carries the semantics.
-enum class EvidenceInput {
-  kAuto,      // the first present of: evidence, alpha, logits, probabilities, label
-  kEvidence,  // `evidence` (float32, count = C) or `evidence_0` .. `evidence_{C-1}`
-  kAlpha,     // `alpha` (float32, count = C) or `alpha_0` ..; e = alpha - 1
-  kLogits,    // `logits` (float32, count = C) or `logits_0` ..; e by CloudReadOptions::logits
-  kProbabilities,  // `probabilities` (count = C) or `probabilities_0` ..: confidence-scaled
-  kLabel,     // `label` (any integer or float type): one-hot evidence of `label_magnitude`
-  kNone,      // no semantics: occupancy only (zero evidence)
-};
-// "auto", "evidence", "alpha", "logits", "probabilities", "label", "none"; throws
-// std::invalid_argument otherwise.
-EvidenceInput evidenceInputFromName(const std::string& name);
-
-struct CloudReadOptions {
-  int num_classes = 0;
-  EvidenceInput input = EvidenceInput::kAuto;
-  float label_magnitude = kEvidenceMagnitude;  // evidence of the labelled class for `label` inputs
-  // `logits`: how they become evidence (subjective_logic.h); `probabilities` and softmax
-  // logits: E of the confidence-scaled conversion.
-  LogitTransform logit_transform = LogitTransform::kSoftmax;
-  float probability_magnitude = kEvidenceMagnitude;
-  // Labels are raw dataset ids, mapped through this table's learning map (nullptr: class ids).
-  const ClassTable* raw_label_table = nullptr;
-};
-
-// A cloud read from a message: points in the message's frame and their N x C evidence.
-struct SemanticCloud {
-  octomap::Pointcloud points_S;
-  std::vector<float> evidence;  // row-major, points_S.size() x C
-  size_t nonfinite_points = 0;  // dropped for NaN/inf coordinates (organised clouds)
-  std::string source;           // which field was read, e.g. "evidence[20]", "label"
-};
-
-// Reads x, y, z and the evidence by field name and offset, for any point_step, row_step,
-// height and byte order. Returns "" on success, else a message saying what is wrong (missing
-// field, wrong count or type, truncated data, NaN/inf/negative evidence, label out of range);
-// `out` is then unspecified. Points with non-finite coordinates are dropped and counted.
+// The core's readPointCloud2 (pointcloud2_reader.h) of the message.
 std::string fromPointCloud2(const sensor_msgs::PointCloud2& msg, const CloudReadOptions& options,
                             SemanticCloud* out);
 
