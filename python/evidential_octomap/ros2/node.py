@@ -61,10 +61,11 @@ MARKER_TOPICS = {"class": "occupied_cells_vis_array", "uncertainty": "uncertaint
 class ReadyCloud(NamedTuple):
     """A received cloud, read and with its pose, waiting for the insert."""
     header: object
-    points: np.ndarray    # (N, 3) in the cloud's frame
-    evidence: np.ndarray  # (N, C)
-    pose: np.ndarray      # 4 x 4, the cloud's frame -> frame_id
-    source: str           # which field the evidence came from
+    points: np.ndarray              # (N, 3) in the cloud's frame
+    evidence: Optional[np.ndarray]  # (N, C); None: the `model` gives it, on the insert thread
+    fields: dict                    # every field of the points, for the model
+    pose: np.ndarray                # 4 x 4, the cloud's frame -> frame_id
+    source: str                     # which field the evidence came from
 
 
 def stamp_ns(stamp) -> int:
@@ -222,8 +223,9 @@ class MappingNode(Node):
 
     # --- input ----------------------------------------------------------------------------
     def _on_cloud(self, msg):
-        """Reception, on the executor (as the ROS 1 node's reception thread): the cloud is read,
-        its evidence made and its transform awaited here, so the insert waits for none of them."""
+        """Reception, on the executor (as the ROS 1 node's reception thread): the cloud is read
+        and its transform awaited here, so the insert waits for neither. A `model` runs on the
+        insert thread, on the newest cloud: here a slow network would hold clouds back in DDS."""
         self.status.received_cloud()
         ready = self._receive(msg)
         if ready is None:
@@ -244,17 +246,10 @@ class MappingNode(Node):
                                        self.classes if v["label_is_raw"] else None)
         except pointcloud2.CloudError as e:
             return self._drop(MALFORMED, msg.header, f"{e}; map unchanged")
-        evidence = cloud.evidence
-        if evidence is None:
-            if self.model is None:
-                return self._drop(NO_SEMANTICS, msg.header, "no semantic field (evidence, alpha, "
-                                  "logits, probabilities or label; fields: "
-                                  f"{', '.join(f.name for f in msg.fields)}) and no `model`")
-            try:
-                evidence = np.asarray(self.model(cloud.points, cloud.fields), dtype=np.float32)
-            except Exception as e:  # a user's model: report, keep mapping
-                return self._drop(REFUSED, msg.header,
-                                  f"model failed: {type(e).__name__}: {e}")
+        if cloud.evidence is None and self.model is None:
+            return self._drop(NO_SEMANTICS, msg.header, "no semantic field (evidence, alpha, "
+                              "logits, probabilities or label; fields: "
+                              f"{', '.join(f.name for f in msg.fields)}) and no `model`")
         t_read = time.monotonic()
         try:
             pose = self.tf.lookup(v["frame_id"], msg.header.frame_id, stamp_ns(msg.header.stamp),
@@ -262,7 +257,8 @@ class MappingNode(Node):
         except TfError as e:
             return self._drop(NO_TRANSFORM, msg.header, str(e))
         self.status.received_stages(t_read - t0, time.monotonic() - t_read)
-        return ReadyCloud(msg.header, cloud.points, evidence, pose, cloud.source)
+        return ReadyCloud(msg.header, cloud.points, cloud.evidence, cloud.fields, pose,
+                          cloud.source)
 
     def _on_lost(self, info):
         """Clouds DDS lost before the node saw them (its reader's history overflowed, or
@@ -306,17 +302,24 @@ class MappingNode(Node):
         self.map_size_stale = False
 
     def _insert(self, ready: ReadyCloud):
+        evidence = ready.evidence
+        if evidence is None:
+            try:
+                evidence = np.asarray(self.model(ready.points, ready.fields), dtype=np.float32)
+            except Exception as e:  # a user's model: report, keep mapping
+                return self._drop(REFUSED, ready.header,
+                                  f"model failed: {type(e).__name__}: {e}")
         t_wait = time.monotonic()
         try:
             with self.lock:
                 t0 = time.monotonic()
-                self.tree.insert_scan(ready.points, ready.evidence, pose=ready.pose)
+                self.tree.insert_scan(ready.points, evidence, pose=ready.pose)
                 t_inserted = time.monotonic()
                 self._map_size_after_insert()
                 if self.foxglove is not None:  # the cloud, the pose, the map when due
                     self.foxglove.update(self.tree, ready.points, ready.pose,
                                          stamp_ns(ready.header.stamp), ready.header.frame_id,
-                                         ready.evidence)
+                                         evidence)
         except ValueError as e:
             return self._drop(REFUSED, ready.header, f"evidence refused: {e}; map unchanged")
         self.status.inserted_cloud(len(ready.points), t0 - t_wait, t_inserted - t0)

@@ -11,8 +11,8 @@ from collections import Counter, deque
 # Why a cloud is not in the map, as counted (the reason text of each drop says more).
 MALFORMED, NO_SEMANTICS, NO_TRANSFORM, QUEUE_FULL, REFUSED = (
     "malformed", "no_semantic_field", "no_transform", "queue_full", "evidence_refused")
-# A cloud's stages, in order: read (fields, evidence; a model), tf_wait (on the executor),
-# lock_wait (behind the views or a service), insert (the insert thread).
+# A cloud's stages, in order: read (its fields and evidence) and tf_wait, on the executor;
+# lock_wait (behind the views or a service) and insert, on the insert thread.
 STAGES = ("read", "tf_wait", "lock_wait", "insert")
 
 
