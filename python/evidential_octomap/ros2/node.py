@@ -227,7 +227,10 @@ class MappingNode(Node):
         and its transform awaited here, so the insert waits for neither. A `model` runs on the
         insert thread, on the newest cloud: here a slow network would hold clouds back in DDS."""
         self.status.received_cloud()
-        ready = self._receive(msg)
+        try:
+            ready = self._receive(msg)
+        except Exception as e:  # never the executor's end: the cloud is dropped, with why
+            return self._drop(MALFORMED, msg.header, f"not read: {type(e).__name__}: {e}")
         if ready is None:
             return
         pushed_out = self.queue.put(ready)
@@ -278,7 +281,10 @@ class MappingNode(Node):
         while self.running:
             ready = self.queue.get(timeout=0.2)
             if ready is not None:
-                self._insert(ready)
+                try:
+                    self._insert(ready)
+                except Exception as e:  # the insert thread lives on
+                    self._drop(REFUSED, ready.header, f"not inserted: {type(e).__name__}: {e}")
             elif self.map_size_stale:  # no cloud for a moment: the status catches up
                 with self.lock:
                     self._record_map_size()
