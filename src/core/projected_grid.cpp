@@ -7,46 +7,66 @@
 namespace evidential_octomap {
 namespace {
 
-// One leaf of the band as the grid needs it: its lowest x-y cell, its edge in cells, its mark.
-struct Mark {
-  octomap::key_type x, y;
-  uint32_t cells;
-  int8_t value;
-};
+// The least (or, `largest`, the largest end) cell along x-y axis `axis` that a leaf below
+// `node` covers, improving on `best`: subtrees that cannot improve it are not entered, so the
+// search follows the map's edge instead of visiting every leaf.
+void extentAlong(const EvidentialOcTree& tree, const EvidentialOcTreeNode* node,
+                 octomap::OcTreeKey corner, unsigned depth, int axis, bool largest,
+                 uint32_t* best) {
+  const uint32_t size = uint32_t(1) << (tree.getTreeDepth() - depth);
+  const uint32_t lo = corner[axis], hi = lo + size;
+  if (largest ? hi <= *best : lo >= *best) return;
+  if (!tree.nodeHasChildren(node)) {
+    *best = largest ? hi : lo;
+    return;
+  }
+  const octomap::key_type half = octomap::key_type(size / 2);
+  // The children on the side of the edge sought first: a leaf found there bounds the others.
+  for (unsigned side : {unsigned(largest), unsigned(!largest)}) {
+    for (unsigned i = 0; i < 8; ++i) {
+      if ((i >> axis & 1u) != side || !tree.nodeChildExists(node, i)) continue;
+      octomap::OcTreeKey child = corner;
+      for (unsigned a = 0; a < 3; ++a)
+        if (i & (1u << a)) child[a] = octomap::key_type(child[a] + half);
+      extentAlong(tree, tree.getNodeChild(node, i), child, depth + 1, axis, largest, best);
+    }
+  }
+}
 
-// One walk of every leaf gives both the extent (all leaves) and the band's marks; the grid is
-// filled once it is known how large it is.
+// The grid over the x-y extent of every leaf (found along the map's edges), filled in one walk
+// of the leaves whose centre lies in the band.
 template <typename MarkOf>
 ProjectedGrid project(const EvidentialOcTree& tree, double min_z, double max_z, MarkOf mark_of) {
   ProjectedGrid grid;
   grid.resolution = tree.getResolution();
-  const unsigned tree_depth = tree.getTreeDepth();
+  const EvidentialOcTreeNode* root = tree.getRoot();
+  if (root == nullptr) return grid;  // an empty map
+  const octomap::OcTreeKey origin(0, 0, 0);
   uint32_t lo[2] = {UINT32_MAX, UINT32_MAX}, hi[2] = {0, 0};  // cells [lo, hi)
-  std::vector<Mark> marks;
-  detail::walkLeaves(
-      tree, [](const EvidentialOcTreeNode&, unsigned) { return true; },
-      [&](const EvidentialOcTreeNode& leaf, const octomap::OcTreeKey& corner, unsigned depth) {
-        const uint32_t cells = uint32_t(1) << (tree_depth - depth);
-        for (int a = 0; a < 2; ++a) {
-          lo[a] = std::min<uint32_t>(lo[a], corner[a]);
-          hi[a] = std::max<uint32_t>(hi[a], corner[a] + cells);
-        }
-        const double z = tree.keyToCoord(corner[2], depth);
-        if (z >= min_z && z <= max_z) marks.push_back({corner[0], corner[1], cells, mark_of(leaf)});
-      });
-  if (lo[0] == UINT32_MAX) return grid;  // an empty map
+  for (int a = 0; a < 2; ++a) {
+    extentAlong(tree, root, origin, 0, a, false, &lo[a]);
+    extentAlong(tree, root, origin, 0, a, true, &hi[a]);
+  }
   grid.width = hi[0] - lo[0];
   grid.height = hi[1] - lo[1];
   const double half = 0.5 * grid.resolution;
   grid.origin_x = tree.keyToCoord(octomap::key_type(lo[0])) - half;
   grid.origin_y = tree.keyToCoord(octomap::key_type(lo[1])) - half;
   grid.cells.assign(size_t(grid.width) * grid.height, -1);
-  for (const Mark& m : marks) {
-    for (uint32_t dy = 0; dy < m.cells; ++dy) {
-      int8_t* row = &grid.cells[size_t(m.y - lo[1] + dy) * grid.width + (m.x - lo[0])];
-      for (uint32_t dx = 0; dx < m.cells; ++dx) row[dx] = std::max(row[dx], m.value);
-    }
-  }
+  const unsigned tree_depth = tree.getTreeDepth();
+  detail::walkLeaves(
+      tree, [](const EvidentialOcTreeNode&, unsigned) { return true; },
+      [&](const EvidentialOcTreeNode& leaf, const octomap::OcTreeKey& corner, unsigned depth) {
+        const double z = tree.keyToCoord(corner[2], depth);
+        if (!(z >= min_z && z <= max_z)) return;
+        const uint32_t cells = uint32_t(1) << (tree_depth - depth);
+        const int8_t value = mark_of(leaf);
+        int8_t* first = &grid.cells[size_t(corner[1] - lo[1]) * grid.width + (corner[0] - lo[0])];
+        for (uint32_t dy = 0; dy < cells; ++dy) {
+          int8_t* row = first + size_t(dy) * grid.width;
+          for (uint32_t dx = 0; dx < cells; ++dx) row[dx] = std::max(row[dx], value);
+        }
+      });
   return grid;
 }
 

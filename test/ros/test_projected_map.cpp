@@ -57,6 +57,18 @@ std::array<int, 3> expectGridMatches(const nav_msgs::OccupancyGrid& grid,
   return counts;
 }
 
+// The grid spans the x-y extent of all the map's leaves, as OctoMap's own bounds give it.
+void expectGridSpansTheMap(const nav_msgs::OccupancyGrid& grid, const EvidentialOcTree& tree) {
+  double min_x, min_y, min_z, max_x, max_y, max_z;
+  tree.getMetricMin(min_x, min_y, min_z);
+  tree.getMetricMax(max_x, max_y, max_z);
+  const double res = grid.info.resolution;
+  EXPECT_NEAR(grid.info.origin.position.x, min_x, 1e-4);
+  EXPECT_NEAR(grid.info.origin.position.y, min_y, 1e-4);
+  EXPECT_NEAR(grid.info.origin.position.x + grid.info.width * res, max_x, 1e-4);
+  EXPECT_NEAR(grid.info.origin.position.y + grid.info.height * res, max_y, 1e-4);
+}
+
 }  // namespace
 
 TEST(ProjectedMap, EveryCellMatchesTheColumnsVoxels) {
@@ -65,6 +77,7 @@ TEST(ProjectedMap, EveryCellMatchesTheColumnsVoxels) {
   const HeightBand all;
   const auto grid = projectOccupancy(*tree, all, "map");
   EXPECT_EQ(grid.header.frame_id, "map");
+  expectGridSpansTheMap(grid, *tree);
   const auto counts =
       expectGridMatches(grid, *tree, all, [](const EvidentialOcTreeNode*) { return 100; });
   EXPECT_GT(counts[0], 100);  // wall and road
@@ -78,6 +91,7 @@ TEST(ProjectedMap, HeightBandLeavesTheRoadOut) {
   HeightBand above_road;
   above_road.min_z = -0.8;  // the road voxels (z = -1.1) are below
   const auto grid = projectOccupancy(*tree, above_road, "map");
+  expectGridSpansTheMap(grid, *tree);  // of every leaf, not only the band's
   expectGridMatches(grid, *tree, above_road, [](const EvidentialOcTreeNode*) { return 100; });
   // A road cell is free (rays passed above it), a wall cell occupied.
   auto cell = [&](double x, double y) {
@@ -95,6 +109,7 @@ TEST(ProjectedMap, PrunedTreeGivesTheSameGridAsTheExpandedOne) {
   expanded->expand();
   const HeightBand all;
   const auto a = projectOccupancy(*pruned, all, "map"), b = projectOccupancy(*expanded, all, "map");
+  expectGridSpansTheMap(a, *pruned);
   EXPECT_EQ(a.info.width, b.info.width);
   EXPECT_EQ(a.info.height, b.info.height);
   EXPECT_EQ(a.data, b.data);
