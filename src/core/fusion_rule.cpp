@@ -79,6 +79,9 @@ class DempsterRule : public FusionRule {
     const double floor = std::exp(-m);
     double denominator = floor;
     for (int c = 0; c < num_classes; ++c) {
+      // A class without evidence has mass 0 (e^(-m) * 0): most of a voxel's classes, and the
+      // two exponentials are most of a read-out's cost.
+      if (payload[c] == 0.0f) continue;
       const double l = scale * payload[c];
       const double mass = std::exp(l - m) * -std::expm1(-l);
       if (out) out->belief[c] = static_cast<float>(mass);  // divided below
