@@ -6,7 +6,6 @@
 #include <nanobind/stl/tuple.h>
 #include <nanobind/stl/vector.h>
 
-#include <cstring>
 #include <string>
 #include <tuple>
 
@@ -70,20 +69,16 @@ nb::tuple readCloud(const std::vector<FieldIn>& fields, const BytesIn& data, uin
   options.semantics_optional = true;  // a model may give the evidence
   SemanticCloud cloud;
   std::string error;
-  std::vector<float> points;
   {
     nb::gil_scoped_release release;
     error = readPointCloud2(layout, options, &cloud);
-    points.resize(cloud.points_S.size() * 3);
-    for (size_t i = 0; error.empty() && i < cloud.points_S.size(); ++i)
-      std::memcpy(&points[3 * i], &cloud.points_S[i], 3 * sizeof(float));
   }
   if (!error.empty()) throw std::invalid_argument(error);
   const size_t n = cloud.points_S.size();
   nb::object evidence = nb::none();
   if (!cloud.evidence.empty())
     evidence = nb::cast(toNumpy(std::move(cloud.evidence), {n, size_t(num_classes)}));
-  return nb::make_tuple(toNumpy(std::move(points), {n, 3}), evidence, cloud.source,
+  return nb::make_tuple(cloudArray(cloud.points_S), evidence, cloud.source,
                         cloud.nonfinite_points);
 }
 

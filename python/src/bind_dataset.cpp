@@ -20,13 +20,6 @@ Array<double> matrixArray(const Eigen::Matrix4d& T) {
   return toNumpy(std::move(values), {4, 4});
 }
 
-Array<float> cloudArray(const octomap::Pointcloud& cloud) {
-  std::vector<float> xyz;
-  xyz.reserve(cloud.size() * 3);
-  for (const auto& p : cloud) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
-  return toNumpy(std::move(xyz), {cloud.size(), 3});
-}
-
 nb::object classArray(const std::vector<int>& classes) {
   if (classes.empty()) return nb::none();
   return nb::cast(toNumpy(std::vector<int32_t>(classes.begin(), classes.end()), {classes.size()}));

@@ -46,6 +46,8 @@ Array<bool> toNumpyBool(std::vector<uint8_t>&& flags);
 // (N, 3) points as an OctoMap cloud; with a pose, transformed by it in double precision.
 octomap::Pointcloud toPointcloud(const PointsIn& points);
 octomap::Pointcloud toPointcloud(const PointsIn& points, const PoseIn& T_W_S);
+// An OctoMap cloud as (N, 3) float32.
+Array<float> cloudArray(const octomap::Pointcloud& cloud);
 
 // EvidentialOcTree.insert_scan: exactly one of origin (points in the map frame) and pose (4x4
 // sensor-to-map, points in the sensor frame); the GIL is released while the scan is inserted.

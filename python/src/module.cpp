@@ -21,6 +21,13 @@ octomap::Pointcloud toPointcloud(const PointsIn& points) {
   return cloud;
 }
 
+Array<float> cloudArray(const octomap::Pointcloud& cloud) {
+  std::vector<float> xyz;
+  xyz.reserve(cloud.size() * 3);
+  for (const auto& p : cloud) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
+  return toNumpy(std::move(xyz), {cloud.size(), 3});
+}
+
 octomap::Pointcloud toPointcloud(const PointsIn& points, const PoseIn& T_W_S) {
   octomap::Pointcloud cloud;
   cloud.reserve(points.shape(0));
