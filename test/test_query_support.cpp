@@ -110,6 +110,51 @@ TEST_F(QuerySupport, AFreeVoxelAnswersNoMovableClassWhileMovableClearingIsOn) {
   EXPECT_EQ(tree.answer(kCentre).label, 0);
 }
 
+// In the default map a free voxel holds evidence of its own, some spread there by the kernel of
+// an object beside it. A movable class of it is answered while an occupied voxel within the
+// support answers that class (the object is there); once that voxel is free (the object left)
+// it is not, and the voxel's other classes answer as they were stored.
+TEST(FreeVoxelEvidence, AMovableClassIsAnsweredOnlyBesideASurfaceOfIt) {
+  EvidentialOcTree tree(kRes, kClasses, SemanticConfig());
+  tree.setMovableClasses({true, false, false});
+  const std::vector<float> own{2.0f, 1.0f, 0.0f};
+  addVoxel(tree, kCentre, own);
+  addVoxel(tree, offset(1, 0, 0), {3.0f, 0.0f, 0.0f});   // the mover's surface beside it
+  addVoxel(tree, offset(10, 0, 0), {3.0f, 0.0f, 0.0f});  // one beyond every support
+  detail::TreeEditing::updateInnerNodes(tree);
+  tree.updateNode(kCentre, false);
+  ASSERT_FALSE(tree.isNodeOccupied(tree.search(kCentre)));
+  ASSERT_TRUE(tree.isNodeOccupied(tree.search(offset(1, 0, 0))));
+  float got[kClasses];
+  ASSERT_TRUE(tree.answerPayload(kCentre, got));
+  for (int c = 0; c < kClasses; ++c) EXPECT_EQ(got[c], own[c]) << c;
+  EXPECT_EQ(tree.answer(kCentre).label, 0);
+
+  tree.updateNode(offset(1, 0, 0), false);  // the mover has left
+  ASSERT_TRUE(tree.answerPayload(kCentre, got));
+  EXPECT_EQ(got[0], tree.rule().prior());
+  EXPECT_EQ(got[1], own[1]);
+  EXPECT_EQ(tree.answer(kCentre).label, 1);
+  // A static class stays, and so does a movable one in a map that does not clear movers.
+  tree.setMovableClasses({false, false, false});
+  EXPECT_EQ(tree.answer(kCentre).label, 0);
+  tree.setMovableClasses({true, false, false});
+  SemanticConfig keeps_movers;
+  keeps_movers.movable_clearing_observations = 0;
+  tree.setConfig(keeps_movers);
+  EXPECT_EQ(tree.answer(kCentre).label, 0);
+}
+
+// An occupied voxel is the surface: it answers its own movable class whatever is beside it.
+TEST(FreeVoxelEvidence, AnOccupiedVoxelKeepsItsMovableClass) {
+  EvidentialOcTree tree(kRes, kClasses, SemanticConfig());
+  tree.setMovableClasses({true, false, false});
+  addVoxel(tree, kCentre, {2.0f, 1.0f, 0.0f});
+  detail::TreeEditing::updateInnerNodes(tree);
+  ASSERT_TRUE(tree.isNodeOccupied(tree.search(kCentre)));
+  EXPECT_EQ(tree.answer(kCentre).label, 0);
+}
+
 TEST_F(QuerySupport, TheAnswerDoesNotDiscountAPointsReliabilityTwice) {
   // The same stored evidence answers the same whatever sigma0 the map was made with: sigma0
   // discounted each point where it was fused.

@@ -161,13 +161,15 @@ def ghosts():
         raise MissingFigure("clearing_observations.md: no family rows")
     return ("Ten scans after a person or a car passed a static LiDAR (synthetic street), at most "
             "%s of the volume it freed still answered its class with the defaults, %s of it "
-            "free in plain OctoMap too (the rest plain OctoMap still holds occupied), against "
-            "%s with the clearing off; %s with the live profile, %s free in plain OctoMap "
-            "(%s, commit %s, %s). On "
+            "free in plain OctoMap too (the rest plain OctoMap still holds occupied), and at "
+            "most %s of the road layer under its path answered its class, against %s and %s "
+            "with the clearing off; %s with the live profile, %s free in plain OctoMap, %s of "
+            "the road layer (%s, commit %s, %s). On "
             "generated off-road sequences %.0f–%.0f %% of the movers' points no longer answer "
             "their class at the end, against %.0f–%.0f %% with the clearing off, the static "
             "accuracy unchanged (%s, commit %s, %s)." % (
-                on[1], on[2], off[1], live[1], live[2], link, commit, date, min(with_on),
+                on[1], on[2], on[5], off[1], off[5], live[1], live[2], live[5], link, commit,
+                date, min(with_on),
                 max(with_on),
                 min(with_off), max(with_off), gen_link, gen_commit, gen_date))
 

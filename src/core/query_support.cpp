@@ -38,18 +38,15 @@ double EvidentialOcTree::queryLength() const {
              : config_.length_scale;
 }
 
-bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, bool free_voxel,
-                                      float* out) const {
+// Calls visit(values, k, node) for every voxel with evidence within a point's full kernel support
+// around `key` (itself excluded), k > 0 being the kernel weight of the distance to its cube.
+template <typename Visit>
+void EvidentialOcTree::visitSupport(const octomap::OcTreeKey& key, Visit&& visit) const {
   const std::array<int, 3> reach = querySupportReach();
   const double widest = querySupportVertical();
   const double length = queryLength();
   const double half = config_.kernel_distance == "voxel" ? resolution / 2.0 : 0.0;
-  const float prior = rule_->prior();
-  double sum[kMaxClasses] = {};
-  double weight_sum = 0.0, nearest = 0.0;
   float values[kMaxClasses];
-  bool answered[kMaxClasses];
-  for (int c = 0; c < num_classes_; ++c) answered[c] = !(free_voxel && clearsMovable(c));
   for (int dz = -reach[2]; dz <= reach[2]; ++dz) {
     for (int dy = -reach[1]; dy <= reach[1]; ++dy) {
       for (int dx = -reach[0]; dx <= reach[0]; ++dx) {
@@ -65,30 +62,62 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, bool free_v
         };
         const double k_widest = weight(widest);
         if (!(k_widest > 0.0)) continue;
-        if (!payload(search(octomap::OcTreeKey(x, y, z)), values)) continue;
+        const EvidentialOcTreeNode* node = search(octomap::OcTreeKey(x, y, z));
+        if (!payload(node, values)) continue;
         // A neighbour of a ground class reaches as far up as its points did.
         const int label = int(std::max_element(values, values + num_classes_) - values);
         const double up =
             isGroundClass(label) ? config_.ground_vertical_support : config_.vertical_support;
         const double k = up == widest ? k_widest : weight(up);
-        if (!(k > 0.0)) continue;
-        for (int c = 0; c < num_classes_; ++c)
-          if (answered[c]) sum[c] += k * (double(values[c]) - prior);
-        weight_sum += k;
-        nearest = std::max(nearest, k);
+        if (k > 0.0) visit(values, label, k, node);
       }
     }
   }
+}
+
+bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, bool free_voxel,
+                                      float* out) const {
+  const float prior = rule_->prior();
+  double sum[kMaxClasses] = {};
+  double weight_sum = 0.0, nearest = 0.0;
+  bool answered[kMaxClasses];
+  for (int c = 0; c < num_classes_; ++c) answered[c] = !(free_voxel && clearsMovable(c));
+  visitSupport(key, [&](const float* values, int, double k, const EvidentialOcTreeNode*) {
+    for (int c = 0; c < num_classes_; ++c)
+      if (answered[c]) sum[c] += k * (double(values[c]) - prior);
+    weight_sum += k;
+    nearest = std::max(nearest, k);
+  });
   if (!(weight_sum > 0.0)) return false;
   const double scale = nearest / weight_sum;
   for (int c = 0; c < num_classes_; ++c) out[c] = prior + float(scale * sum[c]);
   return true;
 }
 
+// A free voxel's evidence of a movable class came from the kernel of points on an object beside
+// it. While the object is there its surface answers the class; once its voxels are cleared the
+// evidence left in free space is a ghost of it, so the class is not answered there.
+void EvidentialOcTree::dropMovableWithoutSurface(const octomap::OcTreeKey& key,
+                                                 float* values) const {
+  const float prior = rule_->prior();
+  bool ghost[kMaxClasses];
+  bool any = false;
+  for (int c = 0; c < num_classes_; ++c) any |= ghost[c] = clearsMovable(c) && values[c] > prior;
+  if (!any) return;
+  visitSupport(key, [&](const float*, int label, double, const EvidentialOcTreeNode* node) {
+    if (isNodeOccupied(node)) ghost[label] = false;
+  });
+  for (int c = 0; c < num_classes_; ++c)
+    if (ghost[c]) values[c] = prior;
+}
+
 bool EvidentialOcTree::answerPayload(const octomap::OcTreeKey& key, float* out) const {
   const EvidentialOcTreeNode* node = search(key);
   if (!node) return false;  // unknown space: no answer
-  if (payload(node, out)) return true;
+  if (payload(node, out)) {
+    if (!isNodeOccupied(node)) dropMovableWithoutSurface(key, out);
+    return true;
+  }
   // Only a map that keeps its evidence on the surface answers free space from it: in the
   // default map free space near surfaces holds evidence of its own, and a voxel without any
   // (beyond every support, or cleared by clearBox) has no answer.
