@@ -160,11 +160,10 @@ def ghosts():
     if not with_on or not with_off:
         raise MissingFigure("clearing_observations.md: no family rows")
     return ("Ten scans after a person or a car passed a static LiDAR (synthetic street), at most "
-            "%s of the volume it freed still answered its class with the defaults, %s of it "
-            "free in plain OctoMap too (the rest plain OctoMap still holds occupied), and at "
-            "most %s of the road layer under its path answered its class, against %s and %s "
-            "with the clearing off; %s with the live profile, %s free in plain OctoMap, %s of "
-            "the road layer (%s, commit %s, %s). On "
+            "%s of the volume it freed still answered its class with the defaults (%s of it "
+            "free in plain OctoMap too), and %s of the road layer under its path, against %s "
+            "and %s with the clearing off; %s (%s) and %s with the live profile "
+            "(%s, commit %s, %s). On "
             "generated off-road sequences %.0f–%.0f %% of the movers' points no longer answer "
             "their class at the end, against %.0f–%.0f %% with the clearing off, the static "
             "accuracy unchanged (%s, commit %s, %s)." % (
