@@ -1,6 +1,6 @@
 // detail::walkLeaves against OctoMap's own leaf iterator (the reference: the readers used it
-// before), on a SYNTHETIC map with pruned free blocks; and the skip of free inner nodes, which
-// must leave out no occupied leaf.
+// before), on a SYNTHETIC map with pruned free blocks; the inner nodes descend() is asked about;
+// and the skip of free inner nodes, which must leave out no occupied leaf.
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -47,7 +47,7 @@ std::vector<SeenLeaf> byWalk(const EvidentialOcTree& tree, bool occupied_only) {
   std::vector<SeenLeaf> seen;
   detail::walkLeaves(
       tree,
-      [&](const EvidentialOcTreeNode& node, unsigned) {
+      [&](const EvidentialOcTreeNode& node, const octomap::OcTreeKey&, unsigned) {
         return !occupied_only || tree.isNodeOccupied(node);
       },
       [&](const EvidentialOcTreeNode& leaf, const octomap::OcTreeKey& corner, unsigned depth) {
@@ -76,6 +76,26 @@ TEST(LeafWalk, SkippingFreeInnerNodesKeepsEveryOccupiedLeaf) {
   ASSERT_GT(expected.size(), 100u);
   ASSERT_LT(expected.size() * 4, tree->getNumLeafNodes());  // mostly free space to skip
   EXPECT_EQ(byWalk(*tree, true), expected);
+}
+
+// descend() is told where each inner node is: the readers that look within a box skip by it.
+TEST(LeafWalk, DescendSeesEveryInnerNodeAtTheIteratorsCentre) {
+  const auto tree = scannedMap();
+  std::vector<SeenLeaf> expected, seen;
+  for (auto it = tree->begin_tree(); it != tree->end_tree(); ++it)
+    if (tree->nodeHasChildren(&*it))
+      expected.push_back({&*it, it.getX(), it.getY(), it.getZ(), it.getSize(), it.getDepth()});
+  ASSERT_GT(expected.size(), 100u);
+  detail::walkLeaves(
+      *tree,
+      [&](const EvidentialOcTreeNode& node, const octomap::OcTreeKey& corner, unsigned depth) {
+        seen.push_back({&node, tree->keyToCoord(corner[0], depth),
+                        tree->keyToCoord(corner[1], depth), tree->keyToCoord(corner[2], depth),
+                        tree->getNodeSize(depth), depth});
+        return true;
+      },
+      [](const EvidentialOcTreeNode&, const octomap::OcTreeKey&, unsigned) {});
+  EXPECT_EQ(seen, expected);
 }
 
 TEST(LeafWalk, AnEmptyMapHasNoLeaves) {

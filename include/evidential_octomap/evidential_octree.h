@@ -269,8 +269,6 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   double querySupportVertical() const;            // the tallest neighbour support / width
   // `free_voxel`: the voxel is free, so (movable clearing on) no movable class is answered.
   bool supportPayload(const octomap::OcTreeKey& key, bool free_voxel, float* out) const;
-  template <typename Visit>
-  void visitSupport(const octomap::OcTreeKey& key, Visit&& visit) const;
   // A free voxel's `values`: each movable class (clearing on) that no occupied voxel within the
   // support answers is set to the prior (a ghost of an object that has left).
   void dropMovableWithoutSurface(const octomap::OcTreeKey& key, float* values) const;

@@ -53,7 +53,7 @@ Leaves leaves(const EvidentialOcTree& tree, bool occupied_only, bool opinions) {
     std::vector<const EvidentialOcTreeNode*> nodes;
     // Occupied leaves only: a free inner node has none below it (a view's walk skips most of
     // the map's free space).
-    auto descend = [&](const EvidentialOcTreeNode& node, unsigned) {
+    auto descend = [&](const EvidentialOcTreeNode& node, const octomap::OcTreeKey&, unsigned) {
       return !occupied_only || tree.isNodeOccupied(node);
     };
     auto visit = [&](const EvidentialOcTreeNode& leaf, const octomap::OcTreeKey& corner,

@@ -55,7 +55,7 @@ ProjectedGrid project(const EvidentialOcTree& tree, double min_z, double max_z, 
   grid.cells.assign(size_t(grid.width) * grid.height, -1);
   const unsigned tree_depth = tree.getTreeDepth();
   detail::walkLeaves(
-      tree, [](const EvidentialOcTreeNode&, unsigned) { return true; },
+      tree, [](const EvidentialOcTreeNode&, const octomap::OcTreeKey&, unsigned) { return true; },
       [&](const EvidentialOcTreeNode& leaf, const octomap::OcTreeKey& corner, unsigned depth) {
         const double z = tree.keyToCoord(corner[2], depth);
         if (!(z >= min_z && z <= max_z)) return;

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "evidential_octomap/detail/leaf_walk.h"
 #include "evidential_octomap/evidential_octree.h"
 #include "evidential_octomap/sparse_kernel.h"
 
@@ -38,15 +39,18 @@ double EvidentialOcTree::queryLength() const {
              : config_.length_scale;
 }
 
-// Calls visit(values, k, node) for every voxel with evidence within a point's full kernel support
-// around `key` (itself excluded), k > 0 being the kernel weight of the distance to its cube.
-template <typename Visit>
-void EvidentialOcTree::visitSupport(const octomap::OcTreeKey& key, Visit&& visit) const {
+bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, bool free_voxel,
+                                      float* out) const {
   const std::array<int, 3> reach = querySupportReach();
   const double widest = querySupportVertical();
   const double length = queryLength();
   const double half = config_.kernel_distance == "voxel" ? resolution / 2.0 : 0.0;
+  const float prior = rule_->prior();
+  double sum[kMaxClasses] = {};
+  double weight_sum = 0.0, nearest = 0.0;
   float values[kMaxClasses];
+  bool answered[kMaxClasses];
+  for (int c = 0; c < num_classes_; ++c) answered[c] = !(free_voxel && clearsMovable(c));
   for (int dz = -reach[2]; dz <= reach[2]; ++dz) {
     for (int dy = -reach[1]; dy <= reach[1]; ++dy) {
       for (int dx = -reach[0]; dx <= reach[0]; ++dx) {
@@ -62,32 +66,20 @@ void EvidentialOcTree::visitSupport(const octomap::OcTreeKey& key, Visit&& visit
         };
         const double k_widest = weight(widest);
         if (!(k_widest > 0.0)) continue;
-        const EvidentialOcTreeNode* node = search(octomap::OcTreeKey(x, y, z));
-        if (!payload(node, values)) continue;
+        if (!payload(search(octomap::OcTreeKey(x, y, z)), values)) continue;
         // A neighbour of a ground class reaches as far up as its points did.
         const int label = int(std::max_element(values, values + num_classes_) - values);
         const double up =
             isGroundClass(label) ? config_.ground_vertical_support : config_.vertical_support;
         const double k = up == widest ? k_widest : weight(up);
-        if (k > 0.0) visit(values, label, k, node);
+        if (!(k > 0.0)) continue;
+        for (int c = 0; c < num_classes_; ++c)
+          if (answered[c]) sum[c] += k * (double(values[c]) - prior);
+        weight_sum += k;
+        nearest = std::max(nearest, k);
       }
     }
   }
-}
-
-bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, bool free_voxel,
-                                      float* out) const {
-  const float prior = rule_->prior();
-  double sum[kMaxClasses] = {};
-  double weight_sum = 0.0, nearest = 0.0;
-  bool answered[kMaxClasses];
-  for (int c = 0; c < num_classes_; ++c) answered[c] = !(free_voxel && clearsMovable(c));
-  visitSupport(key, [&](const float* values, int, double k, const EvidentialOcTreeNode*) {
-    for (int c = 0; c < num_classes_; ++c)
-      if (answered[c]) sum[c] += k * (double(values[c]) - prior);
-    weight_sum += k;
-    nearest = std::max(nearest, k);
-  });
   if (!(weight_sum > 0.0)) return false;
   const double scale = nearest / weight_sum;
   for (int c = 0; c < num_classes_; ++c) out[c] = prior + float(scale * sum[c]);
@@ -96,17 +88,49 @@ bool EvidentialOcTree::supportPayload(const octomap::OcTreeKey& key, bool free_v
 
 // A free voxel's evidence of a movable class came from the kernel of points on an object beside
 // it. While the object is there its surface answers the class; once its voxels are cleared the
-// evidence left in free space is a ghost of it, so the class is not answered there.
+// evidence left in free space is a ghost of it, so the class is not answered there. The surface
+// is looked for among the occupied leaves within the support: a walk that enters only occupied
+// subtrees overlapping it, and stops once every class has one.
 void EvidentialOcTree::dropMovableWithoutSurface(const octomap::OcTreeKey& key,
                                                  float* values) const {
   const float prior = rule_->prior();
   bool ghost[kMaxClasses];
-  bool any = false;
-  for (int c = 0; c < num_classes_; ++c) any |= ghost[c] = clearsMovable(c) && values[c] > prior;
-  if (!any) return;
-  visitSupport(key, [&](const float*, int label, double, const EvidentialOcTreeNode* node) {
-    if (isNodeOccupied(node)) ghost[label] = false;
-  });
+  int ghosts = 0;
+  for (int c = 0; c < num_classes_; ++c)
+    ghosts += ghost[c] = clearsMovable(c) && values[c] > prior;
+  if (!ghosts) return;
+  const std::array<int, 3> reach = querySupportReach();
+  const double length = queryLength();
+  const double half = config_.kernel_distance == "voxel" ? resolution / 2.0 : 0.0;
+  const unsigned depth_max = getTreeDepth();
+  // The offset from `key` to the block's cell nearest it, per axis [voxels].
+  const auto nearest = [&](const octomap::OcTreeKey& corner, unsigned depth, int a) {
+    const int lo = corner[a], hi = lo + (1 << (depth_max - depth)) - 1;
+    return std::clamp(int(key[a]), lo, hi) - int(key[a]);
+  };
+  const auto within = [&](const octomap::OcTreeKey& corner, unsigned depth) {
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(nearest(corner, depth, a)) > reach[a]) return false;
+    return true;
+  };
+  float leaf_values[kMaxClasses];
+  detail::walkLeaves(
+      *this,
+      [&](const EvidentialOcTreeNode& node, const octomap::OcTreeKey& corner, unsigned depth) {
+        return ghosts > 0 && isNodeOccupied(node) && within(corner, depth);
+      },
+      [&](const EvidentialOcTreeNode& leaf, const octomap::OcTreeKey& corner, unsigned depth) {
+        if (!ghosts || !isNodeOccupied(leaf) || !payload(&leaf, leaf_values)) return;
+        const int label = int(std::max_element(leaf_values, leaf_values + num_classes_) -
+                              leaf_values);
+        if (!ghost[label]) return;
+        const double up =
+            isGroundClass(label) ? config_.ground_vertical_support : config_.vertical_support;
+        const double d = kernelDistance(nearest(corner, depth, 0) * resolution,
+                                        nearest(corner, depth, 1) * resolution,
+                                        nearest(corner, depth, 2) * resolution, half, up);
+        if (sparseKernel(d, length, 1.0) > 0.0) ghost[label] = false, --ghosts;
+      });
   for (int c = 0; c < num_classes_; ++c)
     if (ghost[c]) values[c] = prior;
 }

@@ -15,9 +15,9 @@ inline void prefetchChildren(const EvidentialOcTree& tree, const EvidentialOcTre
     if (tree.nodeChildExists(node, i)) __builtin_prefetch(tree.getNodeChild(node, i));
 }
 
-// `descend(node, depth)` says whether to enter an inner node; `visit(leaf, corner, depth)` sees
-// every leaf reached, with the key of its lowest corner cell (a pruned block is one leaf of its
-// depth). OctoMap keeps an inner node's log-odds at its children's maximum, so a free inner node
+// `descend(node, corner, depth)` says whether to enter an inner node; `visit(leaf, corner, depth)`
+// sees every leaf reached; `corner` is the key of a node's lowest cell (a pruned block is one
+// leaf of its depth). OctoMap keeps an inner node's log-odds at its children's maximum, so a free inner node
 // has no occupied leaf below it: `descend` may skip it.
 template <typename Descend, typename Visit>
 void walkLeaves(const EvidentialOcTree& tree, Descend&& descend, Visit&& visit) {
@@ -30,7 +30,7 @@ void walkLeaves(const EvidentialOcTree& tree, Descend&& descend, Visit&& visit) 
       visit(*node, corner, depth);
       return;
     }
-    if (!descend(*node, depth)) return;
+    if (!descend(*node, corner, depth)) return;
     prefetchChildren(tree, node);
     const octomap::key_type half = octomap::key_type(1) << (tree_depth - depth - 1);
     for (unsigned i = 0; i < 8; ++i) {
