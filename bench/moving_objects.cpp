@@ -1,17 +1,26 @@
 // Moving objects on a generated sequence (SYNTHETIC, `evidential_octomap generate`): maps it once
-// per movable_clearing_observations value (the class table's movable classes, the library
-// defaults otherwise) and reports, per mover, the share of its swept volume that
-// still answers its class `lag` scans after it left (of the swept voxels that are free and were
-// cleared since it left), and at the end a DynamicMap_Benchmark-style
-// static / dynamic accuracy over every point of the sequence:
+// per settings row (the class table's movable and ground classes), beside plain OctoMap fed the
+// same rays, and reports at the end, per mover, over the voxels it swept (centre inside its box
+// at some scan) and left at least `lag` scans before, what moving_street.cpp reports for its
+// street scenes:
+//   freed        those that rays have cleared since it left them (plain OctoMap's log-odds
+//                lower than after the last scan its box covered them);
+//   ghost_share  share of them whose answer (EvidentialOcTree::answer, as a query sees it) is
+//                the mover's class; free_ghost_share: of them, those plain OctoMap holds free;
+//   occupied_share / plain_occupied_share: share of them occupied in this map / in plain's;
+// and a DynamicMap_Benchmark-style static / dynamic accuracy over every point of the sequence:
 //   static accuracy  = share of static points whose voxel is occupied and answers their class;
 //   dynamic accuracy = share of mover points whose voxel no longer answers the mover's class.
-// Usage: moving_objects <dataset> <M,M,...> [lag=10]   (prints one JSON line per M)
+// Usage: moving_objects [--lag N] DATASET ROW...   ROW = LABEL:defaults|FILE.yaml[:key=value,...]
+// Prints one JSON line per row.
+#include <octomap/OcTree.h>
+
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
-#include <set>
 #include <sstream>
 #include <string>
 #include <tuple>
@@ -20,6 +29,8 @@
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "plain_octomap.h"
+#include "settings_rows.h"
 
 using evidential_octomap::EvidentialOcTree;
 using evidential_octomap::SemanticConfig;
@@ -33,10 +44,12 @@ struct Box {
   double x, y, z, yaw, length, width, height;
 };
 
+using Key = std::tuple<int, int, int>;
+
 struct Mover {
-  std::vector<Box> boxes;
-  std::map<std::tuple<int, int, int>, float> left;  // swept voxels' log-odds when it left
-  int last_scan = -1;
+  std::map<int, Box> boxes;  // scan -> its box then
+  // Each voxel it swept: the last scan its box covered it, and plain log-odds after that scan.
+  std::map<Key, std::pair<int, float>> covered;
   std::map<int, size_t> classes;  // GT class of its points -> count
 };
 
@@ -51,34 +64,30 @@ std::map<int, Mover> readMovers(const std::string& path) {
     std::string f[11];
     for (auto& field : f) std::getline(s, field, ',');
     Mover& m = movers[std::stoi(f[1])];
-    m.boxes.push_back({std::stod(f[3]), std::stod(f[4]), std::stod(f[5]), std::stod(f[6]),
-                       std::stod(f[7]), std::stod(f[8]), std::stod(f[9])});
-    m.last_scan = std::max(m.last_scan, std::stoi(f[0]));
+    m.boxes[std::stoi(f[0])] = {std::stod(f[3]), std::stod(f[4]), std::stod(f[5]),
+                                std::stod(f[6]), std::stod(f[7]), std::stod(f[8]),
+                                std::stod(f[9])};
   }
   return movers;
 }
 
-using KeySet = std::set<std::tuple<int, int, int>>;
-
-// Voxels whose centre lies in one of the mover's boxes (the swept volume).
-KeySet sweptVoxels(const Mover& m, const EvidentialOcTree& tree) {
-  KeySet keys;
+// Voxels whose centre lies in the box.
+std::vector<Key> boxVoxels(const Box& b, const octomap::OcTree& tree) {
+  std::vector<Key> keys;
   const double r = tree.getResolution();
-  for (const Box& b : m.boxes) {
-    const double reach = 0.5 * std::hypot(b.length, b.width) + r;
-    for (double x = b.x - reach; x <= b.x + reach; x += r)
-      for (double y = b.y - reach; y <= b.y + reach; y += r)
-        for (double z = b.z - 0.5 * b.height; z <= b.z + 0.5 * b.height; z += r) {
-          const octomap::OcTreeKey k = tree.coordToKey(x, y, z);
-          const octomap::point3d c = tree.keyToCoord(k);
-          const double dx = c.x() - b.x, dy = c.y() - b.y;
-          const double along = std::cos(b.yaw) * dx + std::sin(b.yaw) * dy;
-          const double across = -std::sin(b.yaw) * dx + std::cos(b.yaw) * dy;
-          if (std::fabs(along) <= 0.5 * b.length && std::fabs(across) <= 0.5 * b.width &&
-              std::fabs(c.z() - b.z) <= 0.5 * b.height)
-            keys.insert({k[0], k[1], k[2]});
-        }
-  }
+  const double reach = 0.5 * std::hypot(b.length, b.width) + r;
+  for (double x = b.x - reach; x <= b.x + reach; x += r)
+    for (double y = b.y - reach; y <= b.y + reach; y += r)
+      for (double z = b.z - 0.5 * b.height; z <= b.z + 0.5 * b.height; z += r) {
+        const octomap::OcTreeKey k = tree.coordToKey(x, y, z);
+        const octomap::point3d c = tree.keyToCoord(k);
+        const double dx = c.x() - b.x, dy = c.y() - b.y;
+        const double along = std::cos(b.yaw) * dx + std::sin(b.yaw) * dy;
+        const double across = -std::sin(b.yaw) * dx + std::cos(b.yaw) * dy;
+        if (std::fabs(along) <= 0.5 * b.length && std::fabs(across) <= 0.5 * b.width &&
+            std::fabs(c.z() - b.z) <= 0.5 * b.height)
+          keys.push_back({k[0], k[1], k[2]});
+      }
   return keys;
 }
 
@@ -96,90 +105,157 @@ struct Point {
   int mover;  // instance, 0 static
 };
 
-void run(const Dataset& data, const evidential_octomap::ClassTable& classes,
-         std::map<int, Mover>& movers, int k, int lag, std::vector<Point>* points, bool collect) {
-  SemanticConfig config;
-  config.movable_clearing_observations = k;
-  EvidentialOcTree tree(0.2, classes.numClasses(), config);
-  tree.setClasses(classes);
-  std::ostringstream ghosts;
-  double freed_total = 0, ghost_total = 0;
+struct Shares {
+  size_t freed = 0, ghosts = 0, free_ghosts = 0, occupied = 0, plain_occupied = 0;
+  Shares& operator+=(const Shares& o) {
+    freed += o.freed, ghosts += o.ghosts, free_ghosts += o.free_ghosts;
+    occupied += o.occupied, plain_occupied += o.plain_occupied;
+    return *this;
+  }
+};
+
+double share(size_t part, size_t whole) { return whole ? double(part) / double(whole) : 0.0; }
+
+// The voxels the mover left at least `lag` scans before scan `now`.
+Shares measure(const EvidentialOcTree& tree, const octomap::OcTree& plain, const Mover& m,
+               int cls, int now, int lag) {
+  Shares s;
+  for (const auto& [key, last] : m.covered) {
+    const auto& [scan, then] = last;
+    if (scan + lag > now) continue;
+    const auto& [x, y, z] = key;
+    const octomap::OcTreeKey k(x, y, z);
+    const octomap::OcTreeNode* p = plain.search(k);
+    if (!p || !(p->getLogOdds() < then)) continue;  // no ray has cleared it since
+    ++s.freed;
+    s.plain_occupied += plain.isNodeOccupied(p);
+    const auto* node = tree.search(k);
+    s.occupied += node && tree.isNodeOccupied(node);
+    const bool ghost = tree.answer(k).label == cls;
+    s.ghosts += ghost;
+    s.free_ghosts += ghost && !plain.isNodeOccupied(p);
+  }
+  return s;
+}
+
+// The points of the sequence with their class and mover, and each mover's classes.
+std::vector<Point> collectPoints(const Dataset& data, std::map<int, Mover>& movers) {
+  std::vector<Point> points;
   for (size_t i = 0; i < data.size(); ++i) {
-    Scan scan = data.load(i);
-    if (collect) {
-      const auto raw = readLabelFile(data.path() + "/labels/" + scan.name + ".label");
-      for (size_t j = 0; j < scan.size(); ++j) {
-        const Eigen::Vector3f w = scan.pointW(j);
-        const int instance = int(raw[j] >> 16);
-        points->push_back({octomap::point3d(w.x(), w.y(), w.z()), scan.gt[j], instance});
-        if (instance) ++movers[instance].classes[scan.gt[j]];
-      }
-    }
-    tree.insertSemanticScan(scan.pointsW(), scan.evidence,
-                            octomap::point3d(scan.originW().x(), scan.originW().y(),
-                                             scan.originW().z()));
-    for (auto& [id, m] : movers) {
-      if (m.last_scan == int(i) && m.last_scan + lag < int(data.size())) {
-        for (const auto& [x, y, z] : sweptVoxels(m, tree)) {
-          const auto* node = tree.search(octomap::OcTreeKey(x, y, z));
-          m.left[{x, y, z}] = node ? node->getLogOdds() : 0.0f;
-        }
-      }
-      if (m.last_scan + lag != int(i)) continue;
-      const int cls = majorityClass(m);
-      // Freed: free now and cleared since it left (log-odds lower than then).
-      size_t freed = 0, ghost = 0;
-      for (const auto& [key, then] : m.left) {
-        const auto& [x, y, z] = key;
-        const auto* node = tree.search(octomap::OcTreeKey(x, y, z));
-        if (!node || tree.isNodeOccupied(node) || !(node->getLogOdds() < then)) continue;
-        ++freed;
-        if (tree.opinion(node).label == cls) ++ghost;
-      }
-      m.left.clear();
-      ghosts << (ghosts.tellp() > 0 ? "," : "") << "{\"instance\":" << id << ",\"class\":" << cls
-             << ",\"freed\":" << freed << ",\"ghost_share\":" << (freed ? double(ghost) / freed : 0)
-             << "}";
-      freed_total += freed, ghost_total += ghost;
+    const Scan scan = data.load(i);
+    const auto raw = readLabelFile(data.path() + "/labels/" + scan.name + ".label");
+    for (size_t j = 0; j < scan.size(); ++j) {
+      const Eigen::Vector3f w = scan.pointW(j);
+      const int instance = int(raw[j] >> 16);
+      points.push_back({octomap::point3d(w.x(), w.y(), w.z()), scan.gt[j], instance});
+      if (instance) ++movers[instance].classes[scan.gt[j]];
     }
   }
+  return points;
+}
+
+void printRow(const std::string& label, const EvidentialOcTree& tree,
+              const std::vector<Point>& points, std::map<int, Mover>& movers,
+              const std::vector<std::pair<int, Shares>>& per_mover, int lag) {
   size_t st = 0, st_ok = 0, dy = 0, dy_ok = 0;
-  for (const Point& p : *points) {
+  for (const Point& p : points) {
     const auto* node = tree.nodeAt(p.p);
-    const int label = tree.opinion(node).label;
+    const int answered = tree.query(p.p).label;
     if (p.mover == 0) {
       ++st;
-      st_ok += node && tree.isNodeOccupied(node) && label == p.gt;
+      st_ok += node && tree.isNodeOccupied(node) && answered == p.gt;
     } else {
       ++dy;
-      dy_ok += label != majorityClass(movers[p.mover]);
+      dy_ok += answered != majorityClass(movers[p.mover]);
     }
   }
-  std::cout << "{\"movable_clearing_observations\":" << k << ",\"lag\":" << lag
-            << ",\"ghost_share\":" << (freed_total ? ghost_total / freed_total : 0)
-            << ",\"freed_voxels\":" << freed_total << ",\"static_accuracy\":" << double(st_ok) / st
-            << ",\"dynamic_accuracy\":" << (dy ? double(dy_ok) / dy : 0) << ",\"movers\":["
-            << ghosts.str() << "]}" << std::endl;
+  Shares all;
+  double worst_free = 0.0;
+  std::ostringstream each;
+  for (const auto& [id, s] : per_mover) {
+    all += s;
+    worst_free = std::max(worst_free, share(s.free_ghosts, s.freed));
+    each << (each.tellp() > 0 ? "," : "") << "{\"instance\":" << id << ",\"freed\":" << s.freed
+         << ",\"ghost_share\":" << share(s.ghosts, s.freed)
+         << ",\"free_ghost_share\":" << share(s.free_ghosts, s.freed) << "}";
+  }
+  std::cout << "{\"settings\":\"" << label << "\",\"lag\":" << lag << ",\"freed\":" << all.freed
+            << ",\"ghost_share\":" << share(all.ghosts, all.freed)
+            << ",\"free_ghost_share\":" << share(all.free_ghosts, all.freed)
+            << ",\"worst_free_ghost_share\":" << worst_free
+            << ",\"occupied_share\":" << share(all.occupied, all.freed)
+            << ",\"plain_occupied_share\":" << share(all.plain_occupied, all.freed)
+            << ",\"static_accuracy\":" << share(st_ok, st)
+            << ",\"dynamic_accuracy\":" << share(dy_ok, dy) << ",\"movers\":[" << each.str()
+            << "]}" << std::endl;
+}
+
+// Every row's map and plain OctoMap's, fed the same scans in turn.
+void run(const Dataset& data, const evidential_octomap::ClassTable& classes,
+         std::map<int, Mover>& movers, const std::vector<evbench::SettingsRow>& rows, int lag) {
+  const std::vector<Point> points = collectPoints(data, movers);
+  std::vector<EvidentialOcTree> trees;
+  trees.reserve(rows.size());
+  for (const auto& row : rows) {
+    trees.emplace_back(0.2, classes.numClasses(), row.config);
+    trees.back().setClasses(classes);
+  }
+  octomap::OcTree plain(0.2);
+  for (size_t i = 0; i < data.size(); ++i) {
+    const Scan scan = data.load(i);
+    const octomap::point3d origin(scan.originW().x(), scan.originW().y(), scan.originW().z());
+    const octomap::Pointcloud cloud = scan.pointsW();
+    for (EvidentialOcTree& tree : trees) tree.insertSemanticScan(cloud, scan.evidence, origin);
+    evbench::plainInsert(plain, cloud, origin, -1.0, true);
+    for (auto& [id, m] : movers) {
+      const auto box = m.boxes.find(int(i));
+      if (box == m.boxes.end()) continue;
+      for (const Key& key : boxVoxels(box->second, plain)) {
+        const auto& [x, y, z] = key;
+        const octomap::OcTreeNode* p = plain.search(octomap::OcTreeKey(x, y, z));
+        m.covered[key] = {int(i), p ? p->getLogOdds() : std::numeric_limits<float>::infinity()};
+      }
+    }
+  }
+  // At the end, every voxel a mover left at least `lag` scans before.
+  std::vector<std::vector<std::pair<int, Shares>>> per_mover(rows.size());
+  const int end = int(data.size()) - 1;
+  for (auto& [id, m] : movers)
+    for (size_t r = 0; r < rows.size(); ++r)
+      per_mover[r].push_back({id, measure(trees[r], plain, m, majorityClass(m), end, lag)});
+  for (size_t r = 0; r < rows.size(); ++r)
+    printRow(rows[r].label, trees[r], points, movers, per_mover[r], lag);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 3) {
-    std::cerr << "usage: moving_objects <dataset> <M,M,...> [lag=10]\n";
-    return 2;
-  }
-  const std::string dir = argv[1];
-  const int lag = argc > 3 ? std::stoi(argv[3]) : 10;
-  const auto table = evidential_octomap::ClassTable::load(dir + "/classes.yaml");
-  const Dataset data = Dataset::open(dir, table);
-  auto movers = readMovers(dir + "/movers.csv");
-  std::vector<Point> points;
-  std::stringstream ks(argv[2]);
-  bool first = true;
-  for (std::string k; std::getline(ks, k, ',');) {
-    run(data, table, movers, std::stoi(k), lag, &points, first);
-    first = false;
+  try {
+    int lag = 10;
+    std::string dir;
+    std::vector<evbench::SettingsRow> rows;
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--lag" && i + 1 < argc) {
+        lag = std::stoi(argv[++i]);
+      } else if (dir.empty()) {
+        dir = a;
+      } else {
+        rows.push_back(evbench::parseSettingsRow(a));
+      }
+    }
+    if (rows.empty() || lag < 1) {
+      std::cerr << "usage: moving_objects [--lag N] DATASET "
+                   "LABEL:defaults|FILE.yaml[:key=value,...]...\n";
+      return 2;
+    }
+    const auto table = evidential_octomap::ClassTable::load(dir + "/classes.yaml");
+    const Dataset data = Dataset::open(dir, table);
+    auto movers = readMovers(dir + "/movers.csv");
+    run(data, table, movers, rows, lag);
+  } catch (const std::exception& e) {
+    std::cerr << "moving_objects: " << e.what() << "\n";
+    return 1;
   }
   return 0;
 }

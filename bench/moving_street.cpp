@@ -17,21 +17,19 @@
 // Prints one JSON line per (case, row, mover).
 #include <octomap/OcTree.h>
 
-#include <fstream>
 #include <iostream>
 #include <limits>
 #include <map>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
-#include "evidential_octomap/settings.h"
 #include "moving_scene.h"
 #include "plain_octomap.h"
+#include "settings_rows.h"
 
 using evidential_octomap::EvidentialOcTree;
 using evidential_octomap::SemanticConfig;
@@ -41,55 +39,7 @@ namespace {
 
 constexpr double kResolution = 0.2;
 
-struct Row {
-  std::string label;
-  SemanticConfig config;
-};
-
-void setting(const std::string& name, const std::string& value, SemanticConfig* config) {
-  if (name == "settings_profile") return;  // names the profile, not a setting
-  const evidential_octomap::Setting* s = evidential_octomap::findSetting(name);
-  if (!s || !s->parse(value, config))
-    throw std::invalid_argument("no setting " + name + " = " + value);
-}
-
-std::string trim(const std::string& s) {
-  const size_t b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t\r");
-  return b == std::string::npos ? "" : s.substr(b, e - b + 1);
-}
-
-// A flat `key: value  # comment` profile such as config/mapping_live.yaml.
-void readProfile(const std::string& path, SemanticConfig* config) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument("cannot read " + path);
-  for (std::string line; std::getline(in, line);) {
-    line = trim(line.substr(0, line.find('#')));
-    if (line.empty()) continue;
-    const size_t colon = line.find(':');
-    if (colon == std::string::npos) throw std::invalid_argument(path + ": not key: value: " + line);
-    setting(trim(line.substr(0, colon)), trim(line.substr(colon + 1)), config);
-  }
-}
-
-Row parseRow(const std::string& arg) {
-  std::vector<std::string> parts;
-  std::stringstream s(arg);
-  for (std::string p; std::getline(s, p, ':');) parts.push_back(p);
-  if (parts.size() < 2) throw std::invalid_argument("row is LABEL:defaults|FILE[:k=v,...]: " + arg);
-  Row row{parts[0], SemanticConfig()};
-  if (parts[1] != "defaults") readProfile(parts[1], &row.config);
-  if (parts.size() > 2) {
-    std::stringstream kv(parts[2]);
-    for (std::string item; std::getline(kv, item, ',');) {
-      const size_t eq = item.find('=');
-      if (eq == std::string::npos) throw std::invalid_argument("override is key=value: " + item);
-      setting(item.substr(0, eq), item.substr(eq + 1), &row.config);
-    }
-  }
-  const std::string problem = row.config.problem();
-  if (!problem.empty()) throw std::invalid_argument(row.label + ": " + problem);
-  return row;
-}
+using Row = evbench::SettingsRow;
 
 using Key = std::tuple<int, int, int>;
 
@@ -230,7 +180,7 @@ int main(int argc, char** argv) {
       } else if (a == "--case" && i + 1 < argc) {
         only = argv[++i];
       } else {
-        rows.push_back(parseRow(a));
+        rows.push_back(evbench::parseSettingsRow(a));
       }
     }
     if (rows.empty() || lag < 1 || lag > 20) {
