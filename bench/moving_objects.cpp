@@ -29,6 +29,7 @@
 #include "evidential_octomap/class_table.h"
 #include "evidential_octomap/evaluation/dataset.h"
 #include "evidential_octomap/evidential_octree.h"
+#include "ghost_counts.h"
 #include "plain_octomap.h"
 #include "settings_rows.h"
 
@@ -105,16 +106,8 @@ struct Point {
   int mover;  // instance, 0 static
 };
 
-struct Shares {
-  size_t freed = 0, ghosts = 0, free_ghosts = 0, occupied = 0, plain_occupied = 0;
-  Shares& operator+=(const Shares& o) {
-    freed += o.freed, ghosts += o.ghosts, free_ghosts += o.free_ghosts;
-    occupied += o.occupied, plain_occupied += o.plain_occupied;
-    return *this;
-  }
-};
-
-double share(size_t part, size_t whole) { return whole ? double(part) / double(whole) : 0.0; }
+using Shares = evbench::GhostCounts;
+using evbench::share;
 
 // The voxels the mover left at least `lag` scans before scan `now`.
 Shares measure(const EvidentialOcTree& tree, const octomap::OcTree& plain, const Mover& m,
@@ -124,16 +117,7 @@ Shares measure(const EvidentialOcTree& tree, const octomap::OcTree& plain, const
     const auto& [scan, then] = last;
     if (scan + lag > now) continue;
     const auto& [x, y, z] = key;
-    const octomap::OcTreeKey k(x, y, z);
-    const octomap::OcTreeNode* p = plain.search(k);
-    if (!p || !(p->getLogOdds() < then)) continue;  // no ray has cleared it since
-    ++s.freed;
-    s.plain_occupied += plain.isNodeOccupied(p);
-    const auto* node = tree.search(k);
-    s.occupied += node && tree.isNodeOccupied(node);
-    const bool ghost = tree.answer(k).label == cls;
-    s.ghosts += ghost;
-    s.free_ghosts += ghost && !plain.isNodeOccupied(p);
+    evbench::countIfFreed(tree, plain, octomap::OcTreeKey(x, y, z), then, cls, &s);
   }
   return s;
 }

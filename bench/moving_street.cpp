@@ -27,6 +27,7 @@
 #include <vector>
 
 #include "evidential_octomap/evidential_octree.h"
+#include "ghost_counts.h"
 #include "moving_scene.h"
 #include "plain_octomap.h"
 #include "settings_rows.h"
@@ -74,8 +75,7 @@ std::vector<Key> addBox(const ms::Mover& m, int scan, const EvidentialOcTree& tr
   return swept;
 }
 
-struct Shares {
-  size_t freed = 0, ghosts = 0, own_ghosts = 0, free_ghosts = 0, occupied = 0, plain_occupied = 0;
+struct Shares : evbench::GhostCounts {
   size_t road = 0, road_kept = 0, road_known = 0, road_taken = 0;
 };
 
@@ -84,17 +84,7 @@ Shares measure(const EvidentialOcTree& tree, const octomap::OcTree& plain, const
   Shares s;
   for (const auto& [key, then] : f.left) {
     const auto& [x, y, z] = key;
-    const octomap::OcTreeKey k(x, y, z);
-    const octomap::OcTreeNode* p = plain.search(k);
-    if (!p || !(p->getLogOdds() < then)) continue;  // no ray has cleared it since
-    ++s.freed;
-    s.plain_occupied += plain.isNodeOccupied(p);
-    const auto* node = tree.search(k);
-    s.occupied += node && tree.isNodeOccupied(node);
-    const bool ghost = tree.answer(k).label == label;
-    s.ghosts += ghost;
-    s.free_ghosts += ghost && !plain.isNodeOccupied(p);
-    s.own_ghosts += tree.query(k).label == label;
+    evbench::countIfFreed(tree, plain, octomap::OcTreeKey(x, y, z), then, label, &s);
   }
   for (const auto& [x, y, z] : f.road) {
     const octomap::OcTreeKey k(x, y, z);
@@ -109,7 +99,7 @@ Shares measure(const EvidentialOcTree& tree, const octomap::OcTree& plain, const
   return s;
 }
 
-double share(size_t part, size_t whole) { return whole ? double(part) / double(whole) : 0.0; }
+using evbench::share;
 
 void print(const ms::Case& c, const std::string& row, const ms::Mover& m, int lag,
            const Shares& s) {

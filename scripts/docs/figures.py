@@ -156,30 +156,26 @@ def ghosts():
     families = [r for r in (line.strip("|").split("|") for line in gen.split("\n"))
                 if len(r) == 10 and r[0].strip() in ("farm", "forest", "grassland", "rocky")]
 
-    def most(settings, column):
-        values = [float(r[column].strip(" %")) for r in families if r[1].strip() == settings]
-        if not values:
+    def values(settings, column):
+        found = [float(r[column].strip(" %")) for r in families if r[1].strip() == settings]
+        if not found:
             raise MissingFigure("clearing_observations.md: no %s rows" % settings)
-        return max(values)
-
-    def least(settings, column):
-        return min(float(r[column].strip(" %")) for r in families if r[1].strip() == settings)
+        return found
 
     return ("Ten scans after a person or a car passed a static LiDAR (synthetic street), at most "
             "%s of the volume it freed still answered its class with the defaults (%s of it "
             "free in plain OctoMap too), and %s of the road layer under its path, against %s "
             "and %s with the clearing off; %s (%s) and %s with the live profile "
-            "(%s, commit %s, %s). On generated off-road sequences, where people and vehicles "
-            "keep moving, at most %.1f %% of what they left ten scans before and rays cleared "
-            "answered their class with the defaults (%.2f %% free in plain OctoMap), %.1f %% "
-            "(%.2f %%) with the live profile, against %.0f %% with the clearing off; at the end "
-            "%.0f–%.0f %% of the movers' points no longer answer their class, against "
-            "%.0f–%.0f %%, the static accuracy unchanged (%s, commit %s, %s)." % (
+            "(%s, commit %s, %s). On generated off-road sequences, people and vehicles moving "
+            "throughout, at most %.1f %% (%.2f %% free in plain OctoMap) of what they left ten "
+            "scans before and rays cleared answered their class with the defaults, %.1f %% "
+            "(%.2f %%) live, against %.0f %% or more with the clearing off, the static accuracy "
+            "unchanged (%s, commit %s, %s)." % (
                 on[1], on[2], on[5], off[1], off[5], live[1], live[2], live[5], link, commit,
-                date, most("defaults", 3), most("defaults", 4), most("live profile", 3),
-                most("live profile", 4), least("defaults, clearing off", 3),
-                least("defaults", 9), most("defaults", 9), least("defaults, clearing off", 9),
-                most("defaults, clearing off", 9), gen_link, gen_commit, gen_date))
+                date, max(values("defaults", 3)), max(values("defaults", 4)),
+                max(values("live profile", 3)), max(values("live profile", 4)),
+                min(values("defaults, clearing off", 3)),
+                gen_link, gen_commit, gen_date))
 
 
 def clearing_cost():
