@@ -22,6 +22,7 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -34,7 +35,6 @@
 #include "settings_rows.h"
 
 using evidential_octomap::EvidentialOcTree;
-using evidential_octomap::SemanticConfig;
 using evidential_octomap::Dataset;
 using evidential_octomap::readLabelFile;
 using evidential_octomap::Scan;

@@ -197,7 +197,8 @@ class EvidentialOcTree : public octomap::OccupancyOcTreeBase<EvidentialOcTreeNod
   // its evidence on the surface (config().semantic_occupied_only) and the voxel is known without
   // any, the answer of the voxels with evidence within a point's full kernel support
   // (query_support.cpp; a free voxel's without the movable classes while they are cleared);
-  // vacuous (label -1) in unknown space.
+  // vacuous (label -1) in unknown space. A free voxel answers a movable class (clearing on) only
+  // while an occupied voxel within the support answers it: a mover's ghost is not answered.
   VoxelOpinion query(const octomap::point3d& point_W) const;
   VoxelOpinion answer(const octomap::OcTreeKey& key) const;
   // The same answer as payload values (C floats into `out`); false where there is none.

@@ -6,7 +6,8 @@
 // kernel-weighted mean of those values, discounted by the kernel weight of the nearest one
 // (a voxel next to the surface answers almost as the surface does, one at the edge of the
 // support with little evidence). It is read out only: nothing is stored, so the answer is a
-// function of the stored sums and a merged map answers from its merged evidence.
+// function of the stored sums and a merged map answers from its merged evidence. A free voxel's
+// own evidence of a movable class is answered only beside a surface of that class.
 #include <algorithm>
 #include <cmath>
 

@@ -17,8 +17,8 @@ inline void prefetchChildren(const EvidentialOcTree& tree, const EvidentialOcTre
 
 // `descend(node, corner, depth)` says whether to enter an inner node; `visit(leaf, corner, depth)`
 // sees every leaf reached; `corner` is the key of a node's lowest cell (a pruned block is one
-// leaf of its depth). OctoMap keeps an inner node's log-odds at its children's maximum, so a free inner node
-// has no occupied leaf below it: `descend` may skip it.
+// leaf of its depth). OctoMap keeps an inner node's log-odds at its children's maximum, so a
+// free inner node has no occupied leaf below it: `descend` may skip it.
 template <typename Descend, typename Visit>
 void walkLeaves(const EvidentialOcTree& tree, Descend&& descend, Visit&& visit) {
   const EvidentialOcTreeNode* root = tree.getRoot();
